@@ -1,0 +1,26 @@
+// camera.h — primary rays exactly as conventions.md defines them, so that kdray, its reference
+// and Embree shoot bit-identical centre rays.
+#pragma once
+
+#include "core/kd_shared.h"
+#include "core/math.h"
+#include "core/render_file.h"
+
+namespace kdray {
+
+/// Precomputed camera basis for one image size.
+struct CameraRays {
+    Vec3 origin, forward, right, up;
+    float tan_half_fov, aspect;
+    int width, height;
+
+    CameraRays(const Camera& camera, int width, int height);
+    /// The ray through image position (px, py) in pixels, (x + 0.5, y + 0.5) being pixel (x, y)'s
+    /// centre; the direction is unit length, tmin 0, tmax +inf.
+    KdRay ray(float px, float py) const;
+};
+
+/// A camera that looks at a scene's bounds from the front (+z), used when no render file gives one.
+Camera frame_bounds(const Aabb& bounds, float fov_y = 45.0f);
+
+}  // namespace kdray

@@ -1,0 +1,215 @@
+/* kd_traverse.h — the ray–triangle test and the kd-tree walk, written once in the C subset that
+ * compiles both as C++ (the reference tracer, the brute-force oracle) and as OpenCL C (the trace
+ * kernels). Sharing the code is what makes the OpenCL tracer's hits identical to the reference's.
+ *
+ * Pointers into tree and triangle buffers carry KDRAY_GLOBAL (OpenCL's __global, nothing in C++);
+ * unqualified pointers are private/host memory.
+ */
+#ifndef KDRAY_KD_TRAVERSE_H
+#define KDRAY_KD_TRAVERSE_H
+
+#include "core/kd_shared.h"
+
+#ifdef __OPENCL_VERSION__
+#define KDRAY_GLOBAL __global
+#define KDRAY_FMIN fmin
+#define KDRAY_FMAX fmax
+#define KDRAY_FABS fabs
+#define KDRAY_INF INFINITY
+#ifdef cl_khr_fp64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#define KDRAY_HAS_DOUBLE 1
+#endif
+#else
+#include <cmath>
+#define KDRAY_GLOBAL
+#define KDRAY_FMIN std::fmin
+#define KDRAY_FMAX std::fmax
+#define KDRAY_FABS std::fabs
+#define KDRAY_INF INFINITY
+#define KDRAY_HAS_DOUBLE 1
+#endif
+
+/* Per-ray constants of the watertight test (Woop, Benthin, Wald 2013, "Watertight Ray/Triangle
+ * Intersection", JCGT 2(1)): the axis kz where the direction is largest becomes the ray's z, kx and
+ * ky are swapped to keep the winding when dir[kz] < 0, and the shear maps the direction onto +z. */
+typedef struct KdRayPrecomp {
+    kd_f32 org[3];
+    kd_f32 dir[3];
+    kd_f32 inv_dir[3];
+    kd_i32 kx, ky, kz;
+    kd_f32 sx, sy, sz;
+} KdRayPrecomp;
+
+KDRAY_INLINE KdRayPrecomp kd_ray_precompute(KdRay ray) {
+    KdRayPrecomp p;
+    for (int a = 0; a < 3; ++a) {
+        p.org[a] = ray.org[a];
+        p.dir[a] = ray.dir[a];
+        p.inv_dir[a] = 1.0f / ray.dir[a];
+    }
+    kd_f32 ax = KDRAY_FABS(ray.dir[0]), ay = KDRAY_FABS(ray.dir[1]), az = KDRAY_FABS(ray.dir[2]);
+    p.kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    p.kx = (p.kz + 1) % 3;
+    p.ky = (p.kx + 1) % 3;
+    if (ray.dir[p.kz] < 0.0f) {
+        kd_i32 swap = p.kx;
+        p.kx = p.ky;
+        p.ky = swap;
+    }
+    p.sx = ray.dir[p.kx] / ray.dir[p.kz];
+    p.sy = ray.dir[p.ky] / ray.dir[p.kz];
+    p.sz = 1.0f / ray.dir[p.kz];
+    return p;
+}
+
+/* Tests triangle `id` (9 floats at tri) and, when it is hit at t in [tmin, best->t), makes it the
+ * best hit. Watertight: a ray through a shared edge or vertex hits at least one of the triangles
+ * that share it, and zero-area triangles are never hit. Returns 1 on a new best hit. */
+KDRAY_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL const kd_f32* tri,
+                                       kd_u32 id, kd_f32 tmin, KdHit* best) {
+    /* Vertices relative to the ray origin, then sheared and scaled into ray space. */
+    kd_f32 a[3], b[3], c[3];
+    for (int k = 0; k < 3; ++k) {
+        a[k] = tri[k] - p->org[k];
+        b[k] = tri[3 + k] - p->org[k];
+        c[k] = tri[6 + k] - p->org[k];
+    }
+    const kd_f32 ax = a[p->kx] - p->sx * a[p->kz], ay = a[p->ky] - p->sy * a[p->kz];
+    const kd_f32 bx = b[p->kx] - p->sx * b[p->kz], by = b[p->ky] - p->sy * b[p->kz];
+    const kd_f32 cx = c[p->kx] - p->sx * c[p->kz], cy = c[p->ky] - p->sy * c[p->kz];
+
+    /* Scaled barycentrics; an exact zero is ambiguous in float and is recomputed in double, which
+     * is what makes the test watertight on edges. */
+    kd_f32 u = cx * by - cy * bx;
+    kd_f32 v = ax * cy - ay * cx;
+    kd_f32 w = bx * ay - by * ax;
+#ifdef KDRAY_HAS_DOUBLE
+    if (u == 0.0f || v == 0.0f || w == 0.0f) {
+        u = (kd_f32)((double)cx * (double)by - (double)cy * (double)bx);
+        v = (kd_f32)((double)ax * (double)cy - (double)ay * (double)cx);
+        w = (kd_f32)((double)bx * (double)ay - (double)by * (double)ax);
+    }
+#endif
+    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return 0;
+    const kd_f32 det = u + v + w;
+    if (det == 0.0f) return 0;
+
+    const kd_f32 az = p->sz * a[p->kz], bz = p->sz * b[p->kz], cz = p->sz * c[p->kz];
+    const kd_f32 t_scaled = u * az + v * bz + w * cz;
+    /* Compare before dividing, with det's sign folded in: no division for rejected hits. */
+    const kd_f32 sign = det < 0.0f ? -1.0f : 1.0f;
+    const kd_f32 abs_det = det * sign, t_abs = t_scaled * sign;
+    if (t_abs < tmin * abs_det || t_abs >= best->t * abs_det) return 0;
+    const kd_f32 inv_det = 1.0f / det;
+    const kd_f32 t = t_scaled * inv_det;
+    if (t < tmin || t >= best->t) return 0;
+    best->t = t;
+    best->prim = id;
+    best->u = v * inv_det;
+    best->v = w * inv_det;
+    return 1;
+}
+
+/* Clips the ray's [*t0, *t1] to the box {lo, hi}. Returns 0 when they do not overlap. A ray lying
+ * in a box face with zero direction on that axis gives NaN slab distances; fmin/fmax ignore them,
+ * so the ray counts as inside, as it must for flat boxes. */
+KDRAY_INLINE int kd_clip_to_box(const KdRayPrecomp* p, const kd_f32* lo, const kd_f32* hi,
+                                kd_f32* t0, kd_f32* t1) {
+    for (int a = 0; a < 3; ++a) {
+        kd_f32 tn = (lo[a] - p->org[a]) * p->inv_dir[a];
+        kd_f32 tf = (hi[a] - p->org[a]) * p->inv_dir[a];
+        kd_f32 near_t = KDRAY_FMIN(tn, tf), far_t = KDRAY_FMAX(tn, tf);
+        /* Widen the far distance by a few ulps (pbrt's 1 + 2 gamma(3)) so that rounding never
+         * loses a triangle lying in the box's face. */
+        far_t *= 1.0000004f;
+        *t0 = KDRAY_FMAX(*t0, near_t);
+        *t1 = KDRAY_FMIN(*t1, far_t);
+    }
+    return *t0 <= *t1;
+}
+
+typedef struct KdTraversalEntry {
+    kd_u32 node;
+    kd_f32 tmin, tmax;
+} KdTraversalEntry;
+
+/* Nearest hit of `ray` in the tree. bounds: the root box as lo.xyz, hi.xyz. The stack has
+ * KDRAY_MAX_DEPTH entries: one push per inner node on the current path, and builders never make a
+ * path deeper than that. Hits are accepted wherever they lie on the ray (a triangle in a leaf may
+ * extend beyond it); the walk ends when the best hit is nearer than the next node's entry. */
+KDRAY_INLINE KdHit kd_trace_closest(KDRAY_GLOBAL const KdNode* nodes,
+                                    KDRAY_GLOBAL const kd_u32* leaf_indices,
+                                    KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
+                                    KdRay ray) {
+    KdHit hit;
+    hit.t = ray.tmax;
+    hit.prim = KDRAY_NO_HIT;
+    hit.u = 0.0f;
+    hit.v = 0.0f;
+    KdRayPrecomp p = kd_ray_precompute(ray);
+    kd_f32 tmin = ray.tmin, tmax = ray.tmax;
+    if (!kd_clip_to_box(&p, bounds, bounds + 3, &tmin, &tmax)) {
+        hit.t = KDRAY_INF;
+        return hit;
+    }
+
+    KdTraversalEntry stack[KDRAY_MAX_DEPTH];
+    int stack_size = 0;
+    kd_u32 node_index = 0;
+    for (;;) {
+        /* Stop when the best hit lies before this node. */
+        if (hit.t < tmin) break;
+        KdNode node = nodes[node_index];
+        if (!kd_node_is_leaf(node)) {
+            /* Inner node: visit the child on the origin's side first, the other if the ray
+             * crosses the plane within [tmin, tmax]. */
+            const kd_u32 axis = kd_node_axis(node);
+            const kd_f32 split = kd_node_split(node);
+            const kd_f32 o = p.org[axis], d = p.dir[axis];
+            const kd_u32 below = node_index + 1, above = kd_node_above_child(node);
+            if (d == 0.0f && o == split) {
+                /* Lying in the plane: both children hold triangles the ray may hit. */
+                stack[stack_size].node = above;
+                stack[stack_size].tmin = tmin;
+                stack[stack_size].tmax = tmax;
+                ++stack_size;
+                node_index = below;
+                continue;
+            }
+            const kd_f32 t_plane = (split - o) * p.inv_dir[axis];
+            const int below_first = (o < split) || (o == split && d <= 0.0f);
+            const kd_u32 first = below_first ? below : above;
+            const kd_u32 second = below_first ? above : below;
+            if (t_plane > tmax || t_plane < 0.0f) {
+                node_index = first;
+            } else if (t_plane < tmin) {
+                node_index = second;
+            } else {
+                stack[stack_size].node = second;
+                stack[stack_size].tmin = t_plane;
+                stack[stack_size].tmax = tmax;
+                ++stack_size;
+                node_index = first;
+                tmax = t_plane;
+            }
+            continue;
+        }
+        /* Leaf: test its triangles, then resume from the stack. */
+        const kd_u32 count = kd_leaf_count(node), offset = kd_leaf_offset(node);
+        for (kd_u32 i = 0; i < count; ++i) {
+            const kd_u32 id = leaf_indices[offset + i];
+            kd_intersect_triangle(&p, triangles + (size_t)id * KDRAY_FLOATS_PER_TRIANGLE, id,
+                                  ray.tmin, &hit);
+        }
+        if (stack_size == 0) break;
+        --stack_size;
+        node_index = stack[stack_size].node;
+        tmin = stack[stack_size].tmin;
+        tmax = stack[stack_size].tmax;
+    }
+    if (hit.prim == KDRAY_NO_HIT) hit.t = KDRAY_INF;
+    return hit;
+}
+
+#endif /* KDRAY_KD_TRAVERSE_H */

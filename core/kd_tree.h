@@ -1,0 +1,55 @@
+// kd_tree.h — a built kd-tree on the host: the shared node layout of kd_shared.h plus the root box
+// and the parameters it was built with. Every builder produces one; every tracer walks one.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/kd_shared.h"
+#include "core/math.h"
+
+namespace kdray {
+
+/// The surface area heuristic's constants, stated alongside every SAH figure (conventions.md).
+/// Defaults are Wald & Havran's (2006) K_T = 15, K_I = 20.
+struct SahCosts {
+    float traversal = 15.0f;     // C_t: cost of one traversal step
+    float intersection = 20.0f;  // C_i: cost of one triangle test
+};
+
+/// Build parameters. The reference builder uses costs, empty_bonus and max_depth; the OpenCL
+/// builder of Zhou et al. (2008) uses them all.
+struct BuildParams {
+    SahCosts costs;
+    /// Reference builder: a split with an empty side has its cost scaled by (1 - empty_bonus).
+    float empty_bonus = 0.2f;
+    /// Zhou et al.: nodes with more than this many triangles are "large" (spatial median and
+    /// empty-space cutting); the rest are split by the full SAH with bit masks.
+    int large_node_threshold = 64;
+    /// Zhou et al. C_e: cut off empty space when the empty slab exceeds this share of the extent.
+    float empty_space_ratio = 0.25f;
+    int max_depth = KDRAY_MAX_DEPTH;
+};
+
+/// What a build reports about itself beyond the tree: per-stage wall times in the order the stages
+/// ran (e.g. upload, aabbs, large_nodes, small_nodes, output, download), level counts, and the
+/// device memory it held at its peak. The tree's own figures come from compute_tree_stats.
+struct BuildReport {
+    std::vector<std::pair<std::string, double>> timings_ms;
+    double build_ms = 0;  // the whole build, as the caller sees it
+    int large_node_levels = 0;
+    int small_node_levels = 0;
+    std::size_t device_bytes = 0;  // peak device memory held by the build (0 for CPU builders)
+};
+
+struct KdTree {
+    Aabb bounds;  // root box: the scene's bounds
+    std::vector<KdNode> nodes;
+    std::vector<kd_u32> leaf_indices;
+    BuildParams params;
+    std::string builder;  // "reference" or "opencl"
+};
+
+}  // namespace kdray

@@ -1,0 +1,14 @@
+// reference_builder.h — the CPU reference kd-tree builder: full SAH over sorted split events in
+// O(N log N) (Wald & Havran 2006, "On building fast kd-trees for ray tracing, and on doing that in
+// O(N log N)"), with perfect splits (triangles clipped to the node before their events are made)
+// and an empty-space bonus. It is the quality yardstick for the OpenCL builder, not a fast one.
+#pragma once
+
+#include "core/kd_tree.h"
+#include "core/scene.h"
+
+namespace kdray {
+
+KdTree build_reference(const Scene& scene, const BuildParams& params = {});
+
+}  // namespace kdray

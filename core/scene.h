@@ -1,0 +1,75 @@
+// scene.h — a triangle scene as kdray loads it from OBJ/MTL: a flat triangle soup numbered as
+// conventions.md says (tinyobjloader's ObjReader order, shape by shape, face by face), one material
+// index per triangle, and the materials of the MTL files in kdray's small material model.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/kd_shared.h"
+#include "core/math.h"
+
+namespace kdray {
+
+/// The MTL fields kdray uses (Kd, Ks, Ns, Ni, d/Tr, Tf, Ke, illum), with MTL's defaults.
+struct Material {
+    std::string name;
+    Vec3 diffuse{0.8f, 0.8f, 0.8f};  // Kd
+    Vec3 specular{0, 0, 0};          // Ks
+    float shininess = 0.0f;          // Ns
+    float ior = 1.0f;                // Ni
+    float dissolve = 1.0f;           // d (or 1 - Tr): 1 is opaque
+    Vec3 transmission{0, 0, 0};      // Tf
+    Vec3 emission{0, 0, 0};          // Ke
+    int illum = 2;                   // MTL illumination model
+
+    /// Ideal mirror reflection: illum 3 or 5 (ray-traced reflection), or the reflective part of a
+    /// dielectric.
+    bool reflects() const;
+    /// Dielectric refraction: illum 4, 6 or 7, or a dissolve below 1.
+    bool transmits() const;
+    bool emits() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
+    bool has_highlight() const {
+        return (specular.x > 0 || specular.y > 0 || specular.z > 0) && shininess > 0;
+    }
+};
+
+struct Scene {
+    std::filesystem::path path;
+    /// KDRAY_FLOATS_PER_TRIANGLE floats per triangle: v0.xyz v1.xyz v2.xyz.
+    std::vector<float> triangles;
+    /// Index into materials for every triangle. Triangles without a material use the last entry,
+    /// a grey diffuse default that the loader appends only when some triangle needs it.
+    std::vector<kd_u32> material_ids;
+    std::vector<Material> materials;
+    /// Warnings met while loading (a missing MTL file, say), one line each, for stats.json.
+    std::vector<std::string> warnings;
+    /// Triangles of zero area: kept (they are never hit) and counted in the statistics.
+    std::size_t zero_area_triangles = 0;
+
+    std::size_t triangle_count() const { return triangles.size() / KDRAY_FLOATS_PER_TRIANGLE; }
+    Vec3 vertex(std::size_t triangle, int corner) const {
+        const float* p = &triangles[triangle * KDRAY_FLOATS_PER_TRIANGLE + 3 * corner];
+        return {p[0], p[1], p[2]};
+    }
+    Aabb triangle_bounds(std::size_t triangle) const {
+        Aabb b;
+        for (int k = 0; k < 3; ++k) b.grow(vertex(triangle, k));
+        return b;
+    }
+    /// The scene's bounds; this is the root box of every tree built over it.
+    Aabb bounds() const;
+};
+
+/// Loads an OBJ file (and the MTL files it names). Throws Error naming the file, the line where
+/// it can, and the problem: an unreadable file, a non-finite or malformed vertex coordinate, a face
+/// index out of range, an empty scene.
+Scene load_obj(const std::filesystem::path& path);
+
+/// Builds a scene from a triangle soup in memory (tests and generated scenes): one default grey
+/// material, every triangle using it. Throws Error on a non-finite coordinate.
+Scene make_scene(std::vector<float> triangles, std::string name = "<memory>");
+
+}  // namespace kdray

@@ -1,0 +1,18 @@
+// tree_check.h — the invariant checker every tree read back from a builder goes through in tests
+// and debug builds: the layout is well formed (preorder, offsets in range, depth within
+// KDRAY_MAX_DEPTH), split planes lie inside their node's box, and every triangle is referenced by
+// every leaf whose box its clipped part overlaps.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/kd_tree.h"
+#include "core/scene.h"
+
+namespace kdray {
+
+/// Every violated invariant, one line each (empty when the tree is sound). Stops after `limit`.
+std::vector<std::string> check_tree(const KdTree& tree, const Scene& scene, int limit = 20);
+
+}  // namespace kdray

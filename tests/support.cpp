@@ -1,0 +1,164 @@
+#include "tests/support.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <random>
+
+#include "core/kd_traverse.h"
+#include "core/math.h"
+
+namespace kdray::test {
+namespace {
+
+void push_triangle(std::vector<float>& out, Vec3 a, Vec3 b, Vec3 c) {
+    for (Vec3 v : {a, b, c}) out.insert(out.end(), {v.x, v.y, v.z});
+}
+
+}  // namespace
+
+Scene random_triangles(int count, std::uint32_t seed, float extent, float size, float offset) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> pos(0.0f, extent), jitter(-size, size);
+    std::vector<float> tris;
+    for (int i = 0; i < count; ++i) {
+        Vec3 c{offset + pos(rng), offset + pos(rng), offset + pos(rng)};
+        push_triangle(tris, c + Vec3{jitter(rng), jitter(rng), jitter(rng)},
+                      c + Vec3{jitter(rng), jitter(rng), jitter(rng)},
+                      c + Vec3{jitter(rng), jitter(rng), jitter(rng)});
+    }
+    return make_scene(std::move(tris), "random");
+}
+
+Scene planar_triangles(int count, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> pos(0.0f, 1.0f), jitter(-0.05f, 0.05f);
+    std::vector<float> tris;
+    for (int i = 0; i < count; ++i) {
+        float x = pos(rng), y = pos(rng);
+        push_triangle(tris, {x + jitter(rng), y + jitter(rng), 0}, {x + jitter(rng), y + jitter(rng), 0},
+                      {x + jitter(rng), y + jitter(rng), 0});
+    }
+    return make_scene(std::move(tris), "planar");
+}
+
+Scene cube_lattice(int n) {
+    std::vector<float> tris;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+            for (int k = 0; k < n; ++k) {
+                Vec3 o{2.0f * i, 2.0f * j, 2.0f * k};
+                for (int axis = 0; axis < 3; ++axis)
+                    for (int side = 0; side < 2; ++side) {
+                        Vec3 u{}, v{}, w{};
+                        u[(axis + 1) % 3] = 1;
+                        v[(axis + 2) % 3] = 1;
+                        w[axis] = float(side);
+                        Vec3 p = o + w;
+                        push_triangle(tris, p, p + u, p + u + v);
+                        push_triangle(tris, p, p + u + v, p + v);
+                    }
+            }
+    return make_scene(std::move(tris), "cube_lattice");
+}
+
+Scene coincident_triangles(int count) {
+    std::vector<float> tris;
+    for (int i = 0; i < count; ++i) push_triangle(tris, {0, 0, 0}, {1, 0, 0.5f}, {0, 1, 1});
+    return make_scene(std::move(tris), "coincident");
+}
+
+Scene with_zero_area(int count, std::uint32_t seed) {
+    Scene base = random_triangles(count, seed);
+    std::mt19937 rng(seed + 1);
+    std::uniform_real_distribution<float> pos(0.0f, 1.0f);
+    std::vector<float> tris = base.triangles;
+    for (int i = 0; i < count / 4; ++i) {
+        Vec3 p{pos(rng), pos(rng), pos(rng)}, q{pos(rng), pos(rng), pos(rng)};
+        push_triangle(tris, p, p, p);                    // a point
+        push_triangle(tris, p, q, p + (q - p) * 0.5f);  // a segment
+    }
+    return make_scene(std::move(tris), "zero_area");
+}
+
+std::vector<NamedScene> hard_scenes() {
+    std::vector<NamedScene> scenes;
+    scenes.push_back({"random", random_triangles(2000, 1)});
+    scenes.push_back({"planar", planar_triangles(1500, 2)});
+    scenes.push_back({"cube_lattice", cube_lattice(5)});
+    scenes.push_back({"coincident", coincident_triangles(3000)});
+    scenes.push_back({"zero_area", with_zero_area(1000, 3)});
+    scenes.push_back({"far_1e5", random_triangles(1000, 4, 10.0f, 0.5f, 1e5f)});
+    scenes.push_back({"tiny_1e-4", random_triangles(1000, 5, 1e-4f, 1e-5f)});
+    return scenes;
+}
+
+std::vector<KdRay> random_rays(const Scene& scene, int count, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    Aabb b = scene.bounds();
+    Vec3 e = b.extent();
+    float scale = std::max({e.x, e.y, e.z, 1e-30f});
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    auto point_in = [&](float grow) {
+        return Vec3{b.lo.x - grow * scale + unit(rng) * (e.x + 2 * grow * scale),
+                    b.lo.y - grow * scale + unit(rng) * (e.y + 2 * grow * scale),
+                    b.lo.z - grow * scale + unit(rng) * (e.z + 2 * grow * scale)};
+    };
+    auto make = [](Vec3 o, Vec3 d) {
+        KdRay r;
+        r.org[0] = o.x, r.org[1] = o.y, r.org[2] = o.z;
+        r.dir[0] = d.x, r.dir[1] = d.y, r.dir[2] = d.z;
+        r.tmin = 0.0f;
+        r.tmax = INFINITY;
+        return r;
+    };
+    std::vector<KdRay> rays;
+    for (int i = 0; i < count; ++i) {
+        int kind = i % 4;
+        Vec3 o = point_in(kind == 1 ? 0.0f : 0.5f);
+        if (kind == 3 && scene.triangle_count() > 0) {
+            // Start exactly on a triangle box's boundary: a split plane candidate.
+            std::size_t t = rng() % scene.triangle_count();
+            int axis = int(rng() % 3);
+            o[axis] = scene.triangle_bounds(t).lo[axis];
+        }
+        Vec3 d;
+        if (kind == 2) {
+            // Parallel to two axes: slabs and split planes are met edge-on.
+            d = Vec3{};
+            d[int(rng() % 3)] = (rng() & 1) ? 1.0f : -1.0f;
+        } else {
+            d = point_in(0.0f) - o;
+            if (dot(d, d) == 0.0f) d = {0, 0, 1};
+        }
+        rays.push_back(make(o, normalize(d)));
+    }
+    return rays;
+}
+
+KdHit brute_force_closest(const Scene& scene, const KdRay& ray) {
+    KdHit best;
+    best.t = INFINITY;
+    best.prim = KDRAY_NO_HIT;
+    best.u = best.v = 0;
+    KdRayPrecomp pre = kd_ray_precompute(ray);
+    for (std::size_t i = 0; i < scene.triangle_count(); ++i)
+        kd_intersect_triangle(&pre, &scene.triangles[i * KDRAY_FLOATS_PER_TRIANGLE], kd_u32(i),
+                              ray.tmin, &best);
+    return best;
+}
+
+bool hits_agree(const KdHit& a, const KdHit& b) {
+    bool ha = a.prim != KDRAY_NO_HIT, hb = b.prim != KDRAY_NO_HIT;
+    if (ha != hb) return false;
+    if (!ha) return true;
+    return std::fabs(a.t - b.t) <= 1e-4f * std::max(1.0f, std::fabs(b.t));
+}
+
+std::filesystem::path source_dir() {
+    if (const char* dir = std::getenv("KDRAY_SOURCE_DIR")) return dir;
+    return KDRAY_SOURCE_DIR;
+}
+
+std::filesystem::path shared_dir() { return source_dir() / ".." / "shared"; }
+
+}  // namespace kdray::test

@@ -1,0 +1,52 @@
+// support.h — generated scenes and rays shared by the tests, including the hard cases every
+// builder and tracer must survive. Each generator says why its scene is hard.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/kd_shared.h"
+#include "core/scene.h"
+
+namespace kdray::test {
+
+/// Random triangles of size ~`size` inside the cube [offset, offset + extent]^3.
+Scene random_triangles(int count, std::uint32_t seed, float extent = 1.0f, float size = 0.1f,
+                       float offset = 0.0f);
+/// All triangles in the plane z = 0: the root is flat, every node below it too.
+Scene planar_triangles(int count, std::uint32_t seed);
+/// n^3 axis-aligned unit cubes on a lattice of spacing 2: triangles lie exactly on the candidate
+/// split planes, so planar triangles and flat cells are everywhere.
+Scene cube_lattice(int n);
+/// `count` copies of one triangle: no split can separate them, so only the depth limit and the
+/// leaf criterion stop the build.
+Scene coincident_triangles(int count);
+/// Random triangles mixed with zero-area ones (collapsed to a point or a segment), which are
+/// referenced by the tree but must never be hit.
+Scene with_zero_area(int count, std::uint32_t seed);
+
+/// The hard scenes above by name, with the far (offset 1e5) and tiny (extent 1e-4) random scenes.
+struct NamedScene {
+    std::string name;
+    Scene scene;
+};
+std::vector<NamedScene> hard_scenes();
+
+/// Rays aimed at random points of the scene's box from outside and inside it, plus rays parallel
+/// to the axes and rays starting exactly on triangle-box boundaries (split plane candidates).
+std::vector<KdRay> random_rays(const Scene& scene, int count, std::uint32_t seed);
+
+/// Nearest hit by testing every triangle with the shared watertight test: the oracle.
+KdHit brute_force_closest(const Scene& scene, const KdRay& ray);
+
+/// Two hits agree when both miss, or both hit within a relative 1e-4 (conventions.md); the
+/// triangle may differ on a tie.
+bool hits_agree(const KdHit& a, const KdHit& b);
+
+/// The repository root (for testdata/) and ../shared beside it (may not exist).
+std::filesystem::path source_dir();
+std::filesystem::path shared_dir();
+
+}  // namespace kdray::test
