@@ -5,16 +5,109 @@
 
 #include <exception>
 #include <iostream>
+#include <new>
 
+#include "cli/commands.h"
 #include "core/error.h"
+
+namespace {
+
+using namespace kdray::cli;
+
+void add_builder_options(CLI::App& app, BuilderOptions& o) {
+    app.add_option("--builder", o.builder, "kd-tree builder")
+        ->check(CLI::IsMember({"opencl", "reference"}))
+        ->capture_default_str();
+    app.add_option("--device", o.device,
+                   "OpenCL device: an index from `kdray stats` or a name substring "
+                   "(default: the first GPU, else the first device)");
+    app.add_option("--ct", o.params.costs.traversal, "SAH cost of a traversal step, C_t")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    app.add_option("--ci", o.params.costs.intersection, "SAH cost of a triangle test, C_i")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    app.add_option("--large-threshold", o.params.large_node_threshold,
+                   "OpenCL builder: nodes with more triangles are 'large' (median/empty-space "
+                   "splits); the rest get the full SAH (Zhou et al.'s T, at most 64)")
+        ->check(CLI::Range(0, 64))
+        ->capture_default_str();
+    app.add_option("--empty-ratio", o.params.empty_space_ratio,
+                   "OpenCL builder: cut off empty space larger than this share of a large "
+                   "node's extent (Zhou et al.'s C_e)")
+        ->check(CLI::Range(0.0f, 1.0f))
+        ->capture_default_str();
+    app.add_option("--max-depth", o.params.max_depth, "deepest tree level")
+        ->check(CLI::Range(1, KDRAY_MAX_DEPTH))
+        ->capture_default_str();
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
     CLI::App app{"kdray: kd-trees built on an OpenCL device (Zhou et al. 2008), ray traced"};
     app.require_subcommand(1);
+    app.set_version_flag("--version", "kdray 0.1.0");
+
+    BuildCommand build;
+    auto* build_app = app.add_subcommand("build", "Build a kd-tree and print its statistics");
+    build_app->add_option("scene", build.scene, "OBJ scene")->required();
+    build_app->add_option("-o,--output", build.output, "write the tree to this file");
+    build_app->add_flag("--json", build.json, "print one JSON object instead of a table");
+    add_builder_options(*build_app, build.builder);
+
+    RenderCommand render;
+    auto* render_app =
+        app.add_subcommand("render", "Build and trace every frame; write images and stats.json");
+    render_app->add_option("frames", render.inputs, "OBJ frames (files or globs), natural order")
+        ->required();
+    render_app->add_option("-o,--output", render.output_dir, "output folder")->required();
+    render_app->add_option("--camera", render.render_file,
+                           "render file (JSON, see conventions); default: frame the scene");
+    render_app->add_flag("--aov", render.aov, "also write <stem>.aov.exr (Z, prim_id, N)");
+    render_app->add_option("--format", render.format, "image format")
+        ->check(CLI::IsMember({"png", "exr"}))
+        ->capture_default_str();
+    render_app->add_option("--tracer", render.tracer, "ray tracer")
+        ->check(CLI::IsMember({"opencl", "reference"}))
+        ->capture_default_str();
+    render_app
+        ->add_option("--threads", render.threads, "CPU threads for the reference tracer (0: all)")
+        ->check(CLI::NonNegativeNumber);
+    render_app->add_flag("-q,--quiet", render.quiet, "no progress line");
+    add_builder_options(*render_app, render.builder);
+
+    StatsCommand stats;
+    auto* stats_app = app.add_subcommand(
+        "stats",
+        "Statistics of OBJ scenes, tree files or render folders; with none, the OpenCL devices "
+        "and the defaults kdray would build with");
+    stats_app->add_option("paths", stats.paths, "OBJ files, tree files or render output folders");
+    stats_app->add_flag("--json", stats.json, "machine-readable output");
+    add_builder_options(*stats_app, stats.builder);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         return app.exit(e);
+    }
+
+    try {
+        if (*build_app) return run_build(build);
+        if (*render_app) return run_render(render);
+        if (*stats_app) return run_stats(stats);
+    } catch (const kdray::UsageError& e) {
+        std::cerr << "kdray: error: " << e.what() << "\n";
+        return 2;
+    } catch (const kdray::Error& e) {
+        std::cerr << "kdray: error: " << e.what() << "\n";
+        return 1;
+    } catch (const std::bad_alloc&) {
+        std::cerr << "kdray: error: out of host memory\n";
+        return 1;
+    } catch (const std::exception& e) {
+        std::cerr << "kdray: error: " << e.what() << "\n";
+        return 1;
     }
     return 0;
 }

@@ -1,0 +1,87 @@
+// `kdray stats [PATH...]`: statistics of OBJ scenes (built with the chosen builder), tree files
+// or render output folders; with no PATH, the OpenCL devices kdray can use and its defaults.
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include "cli/commands.h"
+#include "cli/devices.h"
+#include "cli/report.h"
+#include "cli/tree_builder.h"
+#include "core/error.h"
+#include "core/scene.h"
+#include "core/tree_file.h"
+#include "core/tree_stats.h"
+
+namespace kdray::cli {
+namespace {
+
+nlohmann::json defaults_json(const BuilderOptions& o) {
+    const BuildParams& p = o.params;
+    return {{"builder", o.builder},
+            {"device", o.device.empty() ? "first GPU, else first device" : o.device},
+            {"cost_traversal", p.costs.traversal},
+            {"cost_intersection", p.costs.intersection},
+            {"large_node_threshold", p.large_node_threshold},
+            {"empty_space_ratio", p.empty_space_ratio},
+            {"empty_bonus", p.empty_bonus},
+            {"max_depth", p.max_depth}};
+}
+
+nlohmann::json render_folder_json(const std::filesystem::path& dir) {
+    std::filesystem::path file = dir / "stats.json";
+    std::ifstream in(file);
+    if (!in) throw Error(dir.string() + ": not a render output folder (no stats.json)");
+    nlohmann::json stats;
+    try {
+        stats = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+        throw Error(file.string() + ": malformed JSON: " + e.what());
+    }
+    if (!stats.contains("summary") || !stats.contains("frames"))
+        throw Error(file.string() + ": not a kdray stats file (no summary or frames)");
+    nlohmann::json j = stats["summary"];
+    j["folder"] = dir.string();
+    j["builder"] = stats.value("builder", "");
+    j["tracer"] = stats.value("tracer", "");
+    return j;
+}
+
+nlohmann::json path_json(const std::string& path, TreeBuilder& builder) {
+    if (std::filesystem::is_directory(path)) return {{"render", render_folder_json(path)}};
+    if (!std::filesystem::exists(path)) throw Error(path + ": no such file");
+    if (std::filesystem::path(path).extension() == ".obj") {
+        Scene scene = load_obj(path);
+        BuiltTree built = builder.build(scene);
+        return {{"scene", scene_json(scene)}, {"tree", tree_json(built, scene.triangle_count())}};
+    }
+    TreeFile file = read_tree_file(path);
+    nlohmann::json tree = to_json(
+        compute_tree_stats(file.tree, std::size_t(file.scene_triangles), file.tree.params.costs));
+    tree["builder"] = file.tree.builder;
+    return {{"tree_file", {{"path", path}, {"scene", file.scene_path}}}, {"tree", tree}};
+}
+
+}  // namespace
+
+int run_stats(const StatsCommand& command) {
+    nlohmann::json out;
+    if (command.paths.empty()) {
+        out = {{"devices", list_devices_json()}, {"defaults", defaults_json(command.builder)}};
+    } else {
+        TreeBuilder builder(command.builder);
+        nlohmann::json items = nlohmann::json::array();
+        for (const std::string& path : command.paths) items.push_back(path_json(path, builder));
+        out = command.paths.size() == 1 ? items[0] : nlohmann::json{{"items", items}};
+    }
+    if (command.json) {
+        std::cout << out.dump(2) << "\n";
+    } else if (out.contains("items")) {
+        for (const auto& item : out["items"]) print_table(std::cout, item);
+    } else {
+        print_table(std::cout, out);
+    }
+    return 0;
+}
+
+}  // namespace kdray::cli

@@ -1,0 +1,48 @@
+// commands.h — the options of each kdray command as parsed by cli/main.cpp, and the commands.
+// Commands return the process exit status; they throw kdray::Error for main to report.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/kd_tree.h"
+
+namespace kdray::cli {
+
+/// Which builder, on which device, with which parameters: shared by build, render and stats.
+struct BuilderOptions {
+    std::string builder = "opencl";  // "opencl" or "reference"
+    std::string device;              // index or name substring; empty: first GPU, else first device
+    BuildParams params;
+};
+
+struct BuildCommand {
+    std::string scene;
+    std::string output;  // tree file, optional
+    bool json = false;
+    BuilderOptions builder;
+};
+
+struct RenderCommand {
+    std::vector<std::string> inputs;
+    std::string output_dir;
+    std::string render_file;
+    bool aov = false;
+    std::string format = "png";
+    std::string tracer = "reference";
+    int threads = 0;
+    bool quiet = false;
+    BuilderOptions builder;
+};
+
+struct StatsCommand {
+    std::vector<std::string> paths;
+    bool json = false;
+    BuilderOptions builder;
+};
+
+int run_build(const BuildCommand& command);
+int run_render(const RenderCommand& command);
+int run_stats(const StatsCommand& command);
+
+}  // namespace kdray::cli

@@ -1,0 +1,146 @@
+#include "core/tree_file.h"
+
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <vector>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace kdray {
+namespace {
+
+constexpr char kMagic[8] = {'K', 'D', 'R', 'A', 'Y', 'T', 'R', 'E'};
+
+class Writer {
+  public:
+    template <typename T>
+    void put(const T& value) {
+        const char* p = reinterpret_cast<const char*>(&value);
+        bytes_.insert(bytes_.end(), p, p + sizeof(T));
+    }
+    void put_string(const std::string& s) {
+        put(std::uint32_t(s.size()));
+        bytes_.insert(bytes_.end(), s.begin(), s.end());
+    }
+    template <typename T>
+    void put_array(const std::vector<T>& v) {
+        put(std::uint64_t(v.size()));
+        const char* p = reinterpret_cast<const char*>(v.data());
+        bytes_.insert(bytes_.end(), p, p + v.size() * sizeof(T));
+    }
+    std::string_view bytes() const { return {bytes_.data(), bytes_.size()}; }
+
+  private:
+    std::vector<char> bytes_;
+};
+
+class Reader {
+  public:
+    Reader(std::vector<char> bytes, std::string name)
+        : bytes_(std::move(bytes)), name_(std::move(name)) {}
+    template <typename T>
+    T get() {
+        T value;
+        need(sizeof(T));
+        std::memcpy(&value, bytes_.data() + at_, sizeof(T));
+        at_ += sizeof(T);
+        return value;
+    }
+    std::string get_string() {
+        auto n = get<std::uint32_t>();
+        need(n);
+        std::string s(bytes_.data() + at_, n);
+        at_ += n;
+        return s;
+    }
+    template <typename T>
+    std::vector<T> get_array() {
+        auto n = get<std::uint64_t>();
+        if (n > (bytes_.size() - at_) / sizeof(T)) truncated();
+        std::vector<T> v(n);
+        std::memcpy(v.data(), bytes_.data() + at_, n * sizeof(T));
+        at_ += n * sizeof(T);
+        return v;
+    }
+    bool at_end() const { return at_ == bytes_.size(); }
+
+  private:
+    void need(std::size_t n) {
+        if (n > bytes_.size() - at_) truncated();
+    }
+    [[noreturn]] void truncated() { throw Error(name_ + ": kd-tree file is truncated"); }
+
+    std::vector<char> bytes_;
+    std::string name_;
+    std::size_t at_ = 0;
+};
+
+}  // namespace
+
+std::uint64_t scene_hash(const Scene& scene) {
+    std::uint64_t h = 14695981039346656037ull;
+    const auto* p = reinterpret_cast<const unsigned char*>(scene.triangles.data());
+    for (std::size_t i = 0; i < scene.triangles.size() * sizeof(float); ++i) {
+        h ^= p[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+void write_tree_file(const std::filesystem::path& path, const KdTree& tree, const Scene& scene) {
+    Writer w;
+    for (char c : kMagic) w.put(c);
+    w.put(kTreeFileVersion);
+    w.put_string(std::filesystem::absolute(scene.path).lexically_normal().string());
+    w.put(std::uint64_t(scene.triangle_count()));
+    w.put(scene_hash(scene));
+    w.put_string(tree.builder);
+    const BuildParams& p = tree.params;
+    w.put(p.costs.traversal);
+    w.put(p.costs.intersection);
+    w.put(p.empty_bonus);
+    w.put(std::int32_t(p.large_node_threshold));
+    w.put(p.empty_space_ratio);
+    w.put(std::int32_t(p.max_depth));
+    for (int a = 0; a < 3; ++a) w.put(tree.bounds.lo[a]);
+    for (int a = 0; a < 3; ++a) w.put(tree.bounds.hi[a]);
+    w.put_array(tree.nodes);
+    w.put_array(tree.leaf_indices);
+    write_file_atomically(path, w.bytes());
+}
+
+TreeFile read_tree_file(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(path.string() + ": cannot open kd-tree file");
+    std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0)
+        throw Error(path.string() + ": not a kdray kd-tree file");
+    Reader r(std::move(bytes), path.string());
+    for (std::size_t i = 0; i < sizeof(kMagic); ++i) r.get<char>();
+    auto version = r.get<std::uint32_t>();
+    if (version != kTreeFileVersion)
+        throw Error(path.string() + ": kd-tree file version " + std::to_string(version) +
+                    ", this kdray reads version " + std::to_string(kTreeFileVersion));
+    TreeFile f;
+    f.scene_path = r.get_string();
+    f.scene_triangles = r.get<std::uint64_t>();
+    f.scene_hash = r.get<std::uint64_t>();
+    f.tree.builder = r.get_string();
+    BuildParams& p = f.tree.params;
+    p.costs.traversal = r.get<float>();
+    p.costs.intersection = r.get<float>();
+    p.empty_bonus = r.get<float>();
+    p.large_node_threshold = r.get<std::int32_t>();
+    p.empty_space_ratio = r.get<float>();
+    p.max_depth = r.get<std::int32_t>();
+    for (int a = 0; a < 3; ++a) f.tree.bounds.lo[a] = r.get<float>();
+    for (int a = 0; a < 3; ++a) f.tree.bounds.hi[a] = r.get<float>();
+    f.tree.nodes = r.get_array<KdNode>();
+    f.tree.leaf_indices = r.get_array<kd_u32>();
+    if (!r.at_end()) throw Error(path.string() + ": kd-tree file has trailing bytes");
+    return f;
+}
+
+}  // namespace kdray

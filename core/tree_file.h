@@ -1,0 +1,31 @@
+// tree_file.h — kd-trees saved to disk (`kdray build -o`): a versioned little-endian binary file
+// that records which scene the tree belongs to (its path, triangle count and a hash of the
+// triangle data), so a tree is never used with a scene it was not built for.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "core/kd_tree.h"
+#include "core/scene.h"
+
+namespace kdray {
+
+inline constexpr std::uint32_t kTreeFileVersion = 1;
+
+struct TreeFile {
+    KdTree tree;
+    std::string scene_path;
+    std::uint64_t scene_triangles = 0;
+    std::uint64_t scene_hash = 0;
+};
+
+/// FNV-1a over the triangle floats' bytes: identifies the geometry a tree was built over.
+std::uint64_t scene_hash(const Scene& scene);
+
+void write_tree_file(const std::filesystem::path& path, const KdTree& tree, const Scene& scene);
+/// Throws Error naming the file when it is not a kdray tree, of another version, or truncated.
+TreeFile read_tree_file(const std::filesystem::path& path);
+
+}  // namespace kdray

@@ -1,0 +1,109 @@
+#!/usr/bin/env python3
+"""Renders the shared scenes with kdray and with the Embree peer and compares the hit AOVs.
+
+For every scene folder under ../shared/scenes with a render.json, each OBJ in it (the first frame
+only of an animation, since the peer uses the first camera key) is rendered by
+`kdray render --aov` and by `embree_ref --aov`, and `embree_ref --compare` counts the pixels that
+disagree (conventions.md). A scene passes when mismatch_fraction <= 1e-4.
+
+Exit status: 0 all agree, 1 some disagree or a run failed, 77 when ../shared (or a built peer) is
+absent, so that CTest reports a skip.
+
+  scripts/compare_embree.py --kdray build/kdray [--builder reference] [--tracer reference]
+                            [--quick] [--peer PATH]
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SHARED = os.path.normpath(os.path.join(ROOT, "..", "shared"))
+SKIP = 77
+
+# Scenes too big for a quick run (seconds of CPU reference build each); --quick leaves them out.
+SLOW = {"dragon_res2.obj", "sponza.obj"}
+
+
+def scene_files(quick):
+    scenes_dir = os.path.join(SHARED, "scenes")
+    for folder in sorted(os.listdir(scenes_dir)):
+        camera = os.path.join(scenes_dir, folder, "render.json")
+        if not os.path.isfile(camera):
+            continue
+        objs = sorted(f for f in os.listdir(os.path.join(scenes_dir, folder)) if f.endswith(".obj"))
+        if any(f.startswith("frame_") for f in objs):
+            objs = [f for f in objs if f.startswith("frame_")][:1]
+        for obj in objs:
+            if quick and obj in SLOW:
+                continue
+            yield folder, os.path.join(scenes_dir, folder, obj), camera
+
+
+def build_peer(out_dir):
+    script = os.path.join(SHARED, "peers", "embree", "build.sh")
+    if not os.path.isfile(script):
+        return None
+    result = subprocess.run(["bash", script, out_dir], capture_output=True, text=True)
+    if result.returncode != 0:
+        print("compare_embree: cannot build the Embree peer (install libembree-dev: "
+              "scripts/install-deps.sh --peer):\n" + result.stderr, file=sys.stderr)
+        return None
+    return result.stdout.strip().splitlines()[-1]
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--kdray", required=True)
+    parser.add_argument("--builder", default="reference")
+    parser.add_argument("--tracer", default="reference")
+    parser.add_argument("--peer", help="a built embree_ref (default: build it into a temp dir)")
+    parser.add_argument("--quick", action="store_true", help="leave out the slowest scenes")
+    parser.add_argument("--max-mismatch", type=float, default=1e-4)
+    args = parser.parse_args()
+
+    if not os.path.isdir(os.path.join(SHARED, "scenes")):
+        print("compare_embree: skipped: ../shared/scenes is absent")
+        return SKIP
+    with tempfile.TemporaryDirectory(prefix="kdray-compare-") as tmp:
+        peer = args.peer or build_peer(os.path.join(tmp, "peer"))
+        if not peer:
+            print("compare_embree: skipped: the Embree peer is not available")
+            return SKIP
+        failures = 0
+        for folder, obj, camera in scene_files(args.quick):
+            name = f"{folder}/{os.path.basename(obj)}"
+            out = os.path.join(tmp, folder)
+            start = time.time()
+            run = subprocess.run([args.kdray, "render", obj, "--camera", camera, "--aov", "-q",
+                                  "--builder", args.builder, "--tracer", args.tracer, "-o", out],
+                                 capture_output=True, text=True)
+            if run.returncode != 0:
+                print(f"FAIL {name}: kdray: {run.stderr.strip()}")
+                failures += 1
+                continue
+            kdray_seconds = time.time() - start
+            stem = os.path.splitext(os.path.basename(obj))[0]
+            ours = os.path.join(out, stem + ".aov.exr")
+            theirs = os.path.join(tmp, f"{folder}-{stem}.embree.exr")
+            subprocess.run([peer, obj, "--camera", camera, "--aov", theirs, "--repeat", "1"],
+                           check=True, capture_output=True)
+            cmp = subprocess.run([peer, "--compare", ours, theirs], check=True,
+                                 capture_output=True, text=True)
+            counts = json.loads(cmp.stdout)
+            ok = counts["mismatch_fraction"] <= args.max_mismatch
+            failures += not ok
+            print(f"{'ok  ' if ok else 'FAIL'} {name}: mismatch_fraction "
+                  f"{counts['mismatch_fraction']:.2e} (hit/miss {counts['hit_miss_mismatch']}, "
+                  f"distance {counts['distance_mismatch']}, tie {counts['prim_tie_mismatch']} "
+                  f"of {counts['pixels']}), kdray {kdray_seconds:.1f} s")
+        print(f"compare_embree: {failures} scene(s) disagree" if failures else
+              "compare_embree: every scene agrees with Embree")
+        return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Installs kdray's build and test dependencies from Debian 12 packages. Idempotent: packages that
+# are already installed are left alone and apt is not even asked. Runs as root, or through sudo.
+#   scripts/install-deps.sh            build + test dependencies
+#   scripts/install-deps.sh --peer     also Embree, for the reference peer in ../shared/peers/embree
+set -euo pipefail
+
+packages=(
+    build-essential cmake pkg-config python3
+    pocl-opencl-icd ocl-icd-opencl-dev opencl-clhpp-headers clinfo
+    libopenimageio-dev openimageio-tools
+    libtinyobjloader-dev libcli11-dev nlohmann-json3-dev doctest-dev
+)
+if [[ "${1:-}" == "--peer" ]]; then
+    packages+=(libembree-dev)
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [[ ${#missing[@]} -eq 0 ]]; then
+    exit 0
+fi
+
+sudo=()
+if [[ $(id -u) -ne 0 ]]; then
+    command -v sudo >/dev/null || { echo "install-deps: run as root or install sudo" >&2; exit 1; }
+    sudo=(sudo)
+fi
+echo "install-deps: installing ${missing[*]}" >&2
+"${sudo[@]}" apt-get update -qq
+DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
