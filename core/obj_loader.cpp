@@ -1,0 +1,195 @@
+// obj_loader.cpp — load_obj: an OBJ file (and its MTL libraries) into a Scene.
+//
+// The file is read once and pre-scanned by validate_obj (obj_validate.h), which rejects what
+// Debian's tinyobjloader would silently get wrong; then tinyobjloader's ObjReader parses it with
+// triangulate = true, and the triangles are numbered in the order it lists them, shape by shape,
+// face by face, as conventions.md requires.
+#include <sys/stat.h>
+#include <tiny_obj_loader.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <set>
+#include <string_view>
+
+#include "core/error.h"
+#include "core/obj_validate.h"
+#include "core/scene.h"
+
+namespace kdray {
+namespace {
+
+/// The whole file in memory; Error "FILE: cannot open: <reason>" when it cannot be read.
+std::string read_whole_file(const std::filesystem::path& path) {
+    const std::string name = path.string();
+    std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(name.c_str(), "rb"),
+                                                         &std::fclose);
+    if (!file) throw Error(name + ": cannot open: " + std::strerror(errno));
+    std::string text;
+    struct stat info {};
+    if (::fstat(fileno(file.get()), &info) == 0 && S_ISREG(info.st_mode))
+        text.reserve(static_cast<std::size_t>(info.st_size));
+    char buffer[1 << 16];
+    for (;;) {
+        const std::size_t n = std::fread(buffer, 1, sizeof buffer, file.get());
+        text.append(buffer, n);
+        if (n < sizeof buffer) break;
+    }
+    // A directory opens on Linux, and fails only on the read (EISDIR).
+    if (std::ferror(file.get())) throw Error(name + ": cannot open: " + std::strerror(errno));
+    return text;
+}
+
+Vec3 vec3(const tinyobj::real_t* v) {
+    return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
+}
+
+Material to_material(const tinyobj::material_t& m) {
+    Material out;
+    out.name = m.name;
+    out.diffuse = vec3(m.diffuse);
+    out.specular = vec3(m.specular);
+    out.shininess = static_cast<float>(m.shininess);
+    out.ior = static_cast<float>(m.ior);
+    // tinyobjloader already folds Tr into dissolve (d = 1 - Tr when only Tr is given, d when
+    // both are).
+    out.dissolve = static_cast<float>(m.dissolve);
+    out.transmission = vec3(m.transmittance);
+    out.emission = vec3(m.emission);
+    out.illum = m.illum;
+    return out;
+}
+
+bool starts_with(std::string_view s, std::string_view prefix) {
+    return s.substr(0, prefix.size()) == prefix;
+}
+
+/// tinyobjloader's warnings as one-line scene warnings, each prefixed with the file. Lines that
+/// the loader's own missing-library warnings already cover are dropped, the per-material
+/// "both d and Tr" notes become one line, and repeats are kept once.
+std::vector<std::string> convert_warnings(const std::string& warnings, const std::string& file,
+                                          bool library_missing) {
+    std::vector<std::string> out;
+    std::set<std::string> seen;
+    std::set<std::string> d_and_tr;
+    std::size_t start = 0;
+    while (start < warnings.size()) {
+        std::size_t end = warnings.find('\n', start);
+        if (end == std::string::npos) end = warnings.size();
+        std::string_view line(warnings.data() + start, end - start);
+        start = end + 1;
+        while (!line.empty() && (line.front() == ' ' || line.front() == '\t' ||
+                                 line.front() == '.' || line.front() == '\r'))
+            line.remove_prefix(1);
+        while (!line.empty() && (line.back() == ' ' || line.back() == '\r')) line.remove_suffix(1);
+        if (line.empty()) continue;
+        if (starts_with(line, "Material file [") || starts_with(line, "Failed to load material"))
+            continue;
+        if (library_missing && starts_with(line, "material [")) continue;
+        if (starts_with(line, "Both `d` and `Tr`")) {
+            d_and_tr.insert(std::string(line.substr(0, line.find(". Use"))));
+            continue;
+        }
+        std::string text = file + ": " + std::string(line);
+        if (seen.insert(text).second) out.push_back(std::move(text));
+    }
+    if (!d_and_tr.empty())
+        out.push_back(file + ": " + std::to_string(d_and_tr.size()) +
+                      " material(s) set both d and Tr; the value of d is used");
+    return out;
+}
+
+}  // namespace
+
+Scene load_obj(const std::filesystem::path& path) {
+    const std::string name = path.string();
+
+    // Pre-scan: everything tinyobjloader would silently accept must fail here, with a line.
+    const std::string text = read_whole_file(path);
+    const ObjPrescan prescan = validate_obj(text, name);
+
+    Scene scene;
+    scene.path = path;
+
+    // Missing material libraries are a warning, not an error: the scene still has geometry.
+    // tinyobjloader looks them up beside the OBJ file, and so does this check.
+    bool library_missing = false;
+    for (const MtlReference& library : prescan.material_libraries) {
+        const std::filesystem::path candidate = path.parent_path() / library.name;
+        if (!std::ifstream(candidate)) {
+            library_missing = true;
+            scene.warnings.push_back(name + ":" + std::to_string(library.line) +
+                                     ": material library '" + library.name +
+                                     "' not found; using a grey default material");
+        }
+    }
+
+    tinyobj::ObjReaderConfig config;
+    config.triangulate = true;
+    config.vertex_color = false;
+    tinyobj::ObjReader reader;
+    if (!reader.ParseFromFile(name, config)) {
+        std::string why = reader.Error();
+        while (!why.empty() && (why.back() == '\n' || why.back() == '\r')) why.pop_back();
+        std::replace(why.begin(), why.end(), '\n', ';');
+        throw Error(name + ": " + (why.empty() ? "tinyobjloader cannot parse the file" : why));
+    }
+    for (std::string& w : convert_warnings(reader.Warning(), name, library_missing))
+        scene.warnings.push_back(std::move(w));
+
+    for (const tinyobj::material_t& m : reader.GetMaterials())
+        scene.materials.push_back(to_material(m));
+    const auto default_material = static_cast<kd_u32>(scene.materials.size());
+    bool default_needed = false;
+
+    // Triangles, numbered shape by shape and face by face in tinyobjloader's order.
+    const std::vector<tinyobj::real_t>& vertices = reader.GetAttrib().vertices;
+    scene.triangles.reserve(prescan.triangles * KDRAY_FLOATS_PER_TRIANGLE);
+    scene.material_ids.reserve(prescan.triangles);
+    for (const tinyobj::shape_t& shape : reader.GetShapes()) {
+        const tinyobj::mesh_t& mesh = shape.mesh;
+        std::size_t offset = 0;
+        for (std::size_t f = 0; f < mesh.num_face_vertices.size(); ++f) {
+            const std::size_t count = mesh.num_face_vertices[f];
+            const int material = f < mesh.material_ids.size() ? mesh.material_ids[f] : -1;
+            kd_u32 id = default_material;
+            if (material >= 0 && static_cast<std::size_t>(material) < scene.materials.size())
+                id = static_cast<kd_u32>(material);
+            else
+                default_needed = true;
+            // With triangulate = true every face has 3 vertices; a fan keeps any other safe.
+            for (std::size_t k = 1; k + 1 < count; ++k) {
+                for (std::size_t corner : {std::size_t{0}, k, k + 1}) {
+                    const auto v =
+                        static_cast<std::size_t>(mesh.indices[offset + corner].vertex_index);
+                    for (int axis = 0; axis < 3; ++axis)
+                        scene.triangles.push_back(static_cast<float>(vertices[3 * v + axis]));
+                }
+                scene.material_ids.push_back(id);
+            }
+            offset += count;
+        }
+    }
+    if (default_needed) scene.materials.push_back(Material{.name = "default"});
+
+    if (scene.triangle_count() == 0) throw Error(name + ": the scene has no triangles");
+    if (scene.triangle_count() != prescan.triangles)
+        scene.warnings.push_back(
+            name + ": tinyobjloader made " + std::to_string(scene.triangle_count()) +
+            " triangles from faces that fan-triangulate to " + std::to_string(prescan.triangles));
+
+    // Zero-area triangles are kept (they are never hit) and counted for the statistics.
+    for (std::size_t t = 0; t < scene.triangle_count(); ++t) {
+        const Vec3 a = scene.vertex(t, 0), b = scene.vertex(t, 1), c = scene.vertex(t, 2);
+        if (!is_finite(a) || !is_finite(b) || !is_finite(c))
+            throw Error(name + ": triangle " + std::to_string(t) + " has a non-finite vertex");
+        if (length(cross(b - a, c - a)) == 0.0f) ++scene.zero_area_triangles;
+    }
+    return scene;
+}
+
+}  // namespace kdray

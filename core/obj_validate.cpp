@@ -1,0 +1,348 @@
+// obj_validate.cpp — the OBJ pre-scan: one pass over the file's bytes, a hand-written line
+// scanner and std::from_chars, so that it costs a small fraction of tinyobjloader's own parse.
+#include "core/obj_validate.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+
+#include "core/error.h"
+
+namespace kdray {
+namespace {
+
+constexpr bool is_blank(char c) {
+    return c == ' ' || c == '\t';
+}
+
+/// A token as it may appear in a message: at most 40 bytes, anything unprintable as \xNN, so
+/// that a binary file cannot put raw bytes on the user's terminal.
+std::string printable(std::string_view token) {
+    std::string out;
+    for (std::size_t i = 0; i < token.size() && i < 40; ++i) {
+        const auto c = static_cast<unsigned char>(token[i]);
+        if (c >= 0x20 && c < 0x7f) {
+            out += static_cast<char>(c);
+        } else {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\x%02x", c);
+            out += buf;
+        }
+    }
+    if (token.size() > 40) out += "...";
+    return out;
+}
+
+/// The face attributes an index may refer to, with the words the messages use.
+enum class Attribute { vertex, texcoord, normal };
+
+const char* singular(Attribute a) {
+    switch (a) {
+        case Attribute::vertex:
+            return "vertex";
+        case Attribute::texcoord:
+            return "texture coordinate";
+        case Attribute::normal:
+            return "normal";
+    }
+    return "";
+}
+
+const char* plural(Attribute a) {
+    switch (a) {
+        case Attribute::vertex:
+            return "vertices";
+        case Attribute::texcoord:
+            return "texture coordinates";
+        case Attribute::normal:
+            return "normals";
+    }
+    return "";
+}
+
+/// Statements of the OBJ specification (and tinyobjloader's `vw`/`t` extensions) that kdray
+/// accepts without looking inside; anything else is not an OBJ file kdray understands.
+bool is_known_statement(std::string_view k) {
+    static constexpr std::string_view known[] = {
+        "usemtl",    "g",     "o",        "s",        "mtllib", "l",      "p",      "vp",
+        "vw",        "t",     "cstype",   "deg",      "bmat",   "step",   "curv",   "curv2",
+        "surf",      "parm",  "trim",     "hole",     "scrv",   "sp",     "end",    "con",
+        "mg",        "bevel", "c_interp", "d_interp", "lod",    "usemap", "maplib", "shadow_obj",
+        "trace_obj", "ctech", "stech",    "call",     "csh"};
+    for (std::string_view s : known)
+        if (k == s) return true;
+    return false;
+}
+
+/// The fast path of the vertex check, which is most of the pre-scan's time: true when `token`
+/// is a plain decimal number ([+-]digits[.digits][(e|E)[+-]digits]) whose magnitude is certainly
+/// below 1e38, so below FLT_MAX. Anything else (nan, inf, huge values, garbage) is decided by
+/// the exact path. Measured on bart-robots frame_000 (5 MB, 134k vertices, -O3): the pre-scan
+/// takes 11.5 ms with this test in front of from_chars and 14 ms without it.
+bool is_plain_float(std::string_view s) {
+    std::size_t i = 0;
+    const std::size_t n = s.size();
+    if (i < n && (s[i] == '+' || s[i] == '-')) ++i;
+    // Decimal exponent of the leading significant digit, from the digits' positions.
+    long magnitude = 0;
+    bool seen_digit = false, seen_significant = false;
+    for (; i < n && s[i] >= '0' && s[i] <= '9'; ++i) {
+        seen_digit = true;
+        if (seen_significant)
+            ++magnitude;
+        else if (s[i] != '0')
+            seen_significant = true;
+    }
+    if (i < n && s[i] == '.') {
+        ++i;
+        for (; i < n && s[i] >= '0' && s[i] <= '9'; ++i) {
+            seen_digit = true;
+            if (!seen_significant) {
+                --magnitude;
+                if (s[i] != '0') seen_significant = true;
+            }
+        }
+    }
+    if (!seen_digit) return false;
+    if (i < n && (s[i] == 'e' || s[i] == 'E')) {
+        ++i;
+        bool negative = false;
+        if (i < n && (s[i] == '+' || s[i] == '-')) negative = s[i++] == '-';
+        if (i == n) return false;
+        long exponent = 0;
+        for (; i < n && s[i] >= '0' && s[i] <= '9'; ++i)
+            if (exponent < 100000) exponent = exponent * 10 + (s[i] - '0');
+        magnitude += negative ? -exponent : exponent;
+    }
+    return i == n && (!seen_significant || magnitude < 37);
+}
+
+/// A positive index that points past the attributes defined so far; it is valid only if the
+/// rest of the file defines enough of them, which is known at the end.
+struct ForwardReference {
+    std::size_t line;
+    long long index;
+    Attribute attribute;
+};
+
+class ObjScanner {
+  public:
+    ObjScanner(std::string_view text, const std::string& name) : text_(text), name_(name) {}
+
+    ObjPrescan run() {
+        const char* p = text_.data();
+        const char* const end = p + text_.size();
+        // Skip a UTF-8 byte order mark; tinyobjloader would not see a statement behind it, so
+        // only a comment or a blank line may follow it.
+        bool after_bom = false;
+        if (text_.size() >= 3 && text_.substr(0, 3) == "\xEF\xBB\xBF") {
+            p += 3;
+            after_bom = true;
+        }
+        while (p < end) {
+            ++line_;
+            // Find the line's end ("\n", "\r\n" or a lone "\r", as tinyobjloader splits lines),
+            // rejecting control bytes on the way: they mean a binary or corrupt file.
+            const char* e = p;
+            for (;;) {
+                while (e < end && static_cast<unsigned char>(*e) >= 0x20) ++e;
+                if (e == end || *e == '\n' || *e == '\r') break;
+                if (*e != '\t')
+                    fail("unexpected byte " + printable(std::string_view(e, 1)) +
+                         ": this is not a text OBJ file");
+                ++e;
+            }
+            if (after_bom) {
+                check_after_bom(p, e);
+                after_bom = false;
+            }
+            scan_line(p, e);
+            if (e < end && *e == '\r' && e + 1 < end && e[1] == '\n') ++e;
+            p = e + 1;
+        }
+        check_forward_references();
+        return result_;
+    }
+
+  private:
+    [[noreturn]] void fail(const std::string& what) const {
+        throw Error(name_ + ":" + std::to_string(line_) + ": " + what);
+    }
+
+    void check_after_bom(const char* p, const char* e) {
+        while (p < e && is_blank(*p)) ++p;
+        if (p < e && *p != '#')
+            fail(
+                "a UTF-8 byte order mark precedes a statement, which tinyobjloader would skip; "
+                "remove the mark");
+    }
+
+    /// The next blank-separated token of [p, e), advancing p; empty at the line's end or at a
+    /// comment.
+    static std::string_view next_token(const char*& p, const char* e) {
+        while (p < e && is_blank(*p)) ++p;
+        if (p == e || *p == '#') return {};
+        const char* start = p;
+        while (p < e && !is_blank(*p)) ++p;
+        return {start, static_cast<std::size_t>(p - start)};
+    }
+
+    void scan_line(const char* p, const char* e) {
+        std::string_view keyword = next_token(p, e);
+        if (keyword.empty()) return;
+        // tinyobjloader counts `vn`/`vt` only when a blank follows the keyword; so does this.
+        const bool blank_follows = p < e;
+        if (keyword == "v") return scan_vertex(p, e);
+        if (keyword == "f") return scan_face(p, e);
+        if (keyword == "vt") {
+            result_.texcoords += blank_follows;
+            return;
+        }
+        if (keyword == "vn") {
+            result_.normals += blank_follows;
+            return;
+        }
+        if (keyword == "mtllib") return scan_mtllib(p, e);
+        if (!is_known_statement(keyword)) fail("unknown statement '" + printable(keyword) + "'");
+    }
+
+    void scan_vertex(const char* p, const char* e) {
+        int count = 0;
+        for (std::string_view token; !(token = next_token(p, e)).empty(); ++count)
+            check_coordinate(token);
+        if (count != 3 && count != 4 && count != 6)
+            fail("vertex has " + std::to_string(count) +
+                 " numbers; expected 'x y z', 'x y z w' or 'x y z r g b'");
+        ++result_.vertices;
+    }
+
+    void check_coordinate(std::string_view token) const {
+        if (is_plain_float(token)) return;
+        std::string_view digits = token;
+        // tinyobjloader accepts a leading '+', which from_chars does not.
+        if (digits.size() > 1 && digits[0] == '+' && digits[1] != '-' && digits[1] != '+')
+            digits.remove_prefix(1);
+        double value = 0;
+        const char* const last = digits.data() + digits.size();
+        auto [ptr, ec] = std::from_chars(digits.data(), last, value);
+        if (ec == std::errc::invalid_argument || ptr != last)
+            fail("vertex coordinate '" + printable(token) + "' is not a number");
+        if (ec == std::errc::result_out_of_range) {
+            // from_chars reports underflow and overflow alike; strtod tells them apart (a value
+            // too small for a double reads as zero, which is harmless).
+            value = std::strtod(std::string(digits).c_str(), nullptr);
+        }
+        if (!std::isfinite(value))
+            fail("vertex coordinate '" + printable(token) + "' is not a finite number");
+        if (std::fabs(value) > std::numeric_limits<float>::max())
+            fail("vertex coordinate '" + printable(token) +
+                 "' is not a finite number as a 32-bit float");
+    }
+
+    void scan_face(const char* p, const char* e) {
+        std::size_t count = 0;
+        for (std::string_view token; !(token = next_token(p, e)).empty(); ++count)
+            check_face_vertex(token);
+        if (count < 3)
+            fail("face has " + std::to_string(count) + " vertices; a face needs at least 3");
+        ++result_.faces;
+        result_.triangles += count - 2;
+    }
+
+    /// One face vertex: "v", "v/vt", "v//vn" or "v/vt/vn".
+    void check_face_vertex(std::string_view token) {
+        std::string_view parts[3];
+        std::size_t n = 0, start = 0;
+        for (std::size_t i = 0; i <= token.size(); ++i) {
+            if (i == token.size() || token[i] == '/') {
+                if (n == 3) fail("face vertex '" + printable(token) + "' has more than 3 parts");
+                parts[n++] = token.substr(start, i - start);
+                start = i + 1;
+            }
+        }
+        const bool malformed =
+            parts[0].empty() || (n == 2 && parts[1].empty()) || (n == 3 && parts[2].empty());
+        if (malformed)
+            fail("face vertex '" + printable(token) +
+                 "' is malformed; expected 'v', 'v/vt', 'v//vn' or 'v/vt/vn'");
+        check_index(parts[0], token, Attribute::vertex, result_.vertices);
+        if (n >= 2 && !parts[1].empty())
+            check_index(parts[1], token, Attribute::texcoord, result_.texcoords);
+        if (n == 3) check_index(parts[2], token, Attribute::normal, result_.normals);
+    }
+
+    void check_index(std::string_view text, std::string_view token, Attribute attribute,
+                     std::size_t defined) {
+        std::string_view digits = text;
+        if (digits.size() > 1 && digits[0] == '+') digits.remove_prefix(1);
+        long long index = 0;
+        const char* const last = digits.data() + digits.size();
+        auto [ptr, ec] = std::from_chars(digits.data(), last, index);
+        if (ec != std::errc() || ptr != last)
+            fail("face " + std::string(singular(attribute)) + " index '" + printable(text) +
+                 "' in '" + printable(token) + "' is not an integer");
+        // Messages are built only on failure: this runs for every index of every face.
+        auto what = [&] {
+            return "face " + std::string(singular(attribute)) + " index " + std::to_string(index);
+        };
+        if (index == 0) fail(what() + " is invalid: OBJ indices start at 1");
+        if (index < 0 && static_cast<unsigned long long>(-index) > defined)
+            fail(what() + " reaches before the first " + singular(attribute) + ": only " +
+                 std::to_string(defined) + " " + plural(attribute) +
+                 " are defined before this line");
+        if (index > 0 && static_cast<unsigned long long>(index) > defined)
+            forward_.push_back({line_, index, attribute});
+    }
+
+    void check_forward_references() {
+        for (const ForwardReference& f : forward_) {
+            const std::size_t total = f.attribute == Attribute::vertex     ? result_.vertices
+                                      : f.attribute == Attribute::texcoord ? result_.texcoords
+                                                                           : result_.normals;
+            if (static_cast<unsigned long long>(f.index) > total) {
+                line_ = f.line;
+                fail("face " + std::string(singular(f.attribute)) + " index " +
+                     std::to_string(f.index) + " is out of range: the file has " +
+                     std::to_string(total) + " " + plural(f.attribute));
+            }
+        }
+    }
+
+    /// `mtllib a.mtl b.mtl`: names separated by spaces, a backslash escaping a space, as
+    /// tinyobjloader splits them.
+    void scan_mtllib(const char* p, const char* e) {
+        while (p < e && is_blank(*p)) ++p;
+        std::string current;
+        auto flush = [&] {
+            if (!current.empty()) result_.material_libraries.push_back({current, line_});
+            current.clear();
+        };
+        for (; p < e; ++p) {
+            if (*p == '\\' && p + 1 < e && p[1] == ' ') {
+                current += ' ';
+                ++p;
+            } else if (*p == ' ') {
+                flush();
+            } else {
+                current += *p;
+            }
+        }
+        flush();
+    }
+
+    std::string_view text_;
+    const std::string& name_;
+    std::size_t line_ = 0;
+    ObjPrescan result_;
+    std::vector<ForwardReference> forward_;
+};
+
+}  // namespace
+
+ObjPrescan validate_obj(std::string_view text, const std::string& name) {
+    return ObjScanner(text, name).run();
+}
+
+}  // namespace kdray
