@@ -17,7 +17,13 @@
 #ifndef KDRAY_KD_SHARED_H
 #define KDRAY_KD_SHARED_H
 
-#ifdef __OPENCL_VERSION__
+/* Defined when the header is compiled as OpenCL C (OpenCL C 1.2 compilers define the first,
+ * implementations the second). */
+#if defined(__OPENCL_C_VERSION__) || defined(__OPENCL_VERSION__)
+#define KDRAY_DEVICE_CODE 1
+#endif
+
+#ifdef KDRAY_DEVICE_CODE
 typedef uint kd_u32;
 typedef int kd_i32;
 typedef float kd_f32;
@@ -74,12 +80,24 @@ typedef struct KdHit {
 /* Triangles travel as a flat kd_f32 array, 9 per triangle: v0.xyz v1.xyz v2.xyz. */
 #define KDRAY_FLOATS_PER_TRIANGLE 9
 
-KDRAY_INLINE kd_u32 kd_node_axis(KdNode n) { return n.axis_and_offset & 3u; }
-KDRAY_INLINE int kd_node_is_leaf(KdNode n) { return kd_node_axis(n) == KDRAY_LEAF_AXIS; }
-KDRAY_INLINE kd_f32 kd_node_split(KdNode n) { return KDRAY_AS_FLOAT(n.split_or_count); }
-KDRAY_INLINE kd_u32 kd_node_above_child(KdNode n) { return n.axis_and_offset >> 2; }
-KDRAY_INLINE kd_u32 kd_leaf_count(KdNode n) { return n.split_or_count; }
-KDRAY_INLINE kd_u32 kd_leaf_offset(KdNode n) { return n.axis_and_offset >> 2; }
+KDRAY_INLINE kd_u32 kd_node_axis(KdNode n) {
+    return n.axis_and_offset & 3u;
+}
+KDRAY_INLINE int kd_node_is_leaf(KdNode n) {
+    return kd_node_axis(n) == KDRAY_LEAF_AXIS;
+}
+KDRAY_INLINE kd_f32 kd_node_split(KdNode n) {
+    return KDRAY_AS_FLOAT(n.split_or_count);
+}
+KDRAY_INLINE kd_u32 kd_node_above_child(KdNode n) {
+    return n.axis_and_offset >> 2;
+}
+KDRAY_INLINE kd_u32 kd_leaf_count(KdNode n) {
+    return n.split_or_count;
+}
+KDRAY_INLINE kd_u32 kd_leaf_offset(KdNode n) {
+    return n.axis_and_offset >> 2;
+}
 
 KDRAY_INLINE KdNode kd_make_inner(kd_u32 axis, kd_f32 split, kd_u32 above_child) {
     KdNode n;
@@ -95,10 +113,120 @@ KDRAY_INLINE KdNode kd_make_leaf(kd_u32 count, kd_u32 offset) {
     return n;
 }
 
-#ifndef __OPENCL_VERSION__
+#ifndef KDRAY_DEVICE_CODE
 static_assert(sizeof(KdNode) == 8, "KdNode is 8 bytes on every device");
 static_assert(sizeof(KdRay) == 32, "KdRay is 32 bytes on every device");
 static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
+#endif
+
+/* ---- Rendering: what the render kernel and the reference renderer both read. ---- */
+
+/* Longest path a render follows (render file max_depth); sizes the pending-ray stack. */
+#define KDRAY_MAX_BOUNCES 16
+
+/* Effects a frame calls for (KdView.effects; kernels also get them as -DKDRAY_COMPILED_EFFECTS). */
+#define KDRAY_EFFECT_SHADOWS 1u
+#define KDRAY_EFFECT_REFLECTION 2u
+#define KDRAY_EFFECT_REFRACTION 4u
+
+/* KdMaterial flags. */
+#define KDRAY_MATERIAL_MIRROR 1u     /* ideal mirror reflection weighted by specular (illum 3, 5) */
+#define KDRAY_MATERIAL_DIELECTRIC 2u /* Fresnel reflection + refraction, see transmit_fraction */
+#define KDRAY_MATERIAL_HIGHLIGHT 4u  /* Blinn-Phong highlight from specular and shininess */
+
+/* KdMaterial — 64 bytes.
+ *   diffuse[3]   Kd                      shininess  Ns (Blinn-Phong exponent)
+ *   specular[3]  Ks                      ior        Ni (1 when absent or not above 0)
+ *   emission[3]  Ke                      transmit_fraction  share of light that meets the
+ *                                        dielectric (1 for illum 4/6/7, 1 - d for d < 1, ...)
+ *   filter[3]    colour of transmitted light (Tf where it means transmission, else 1)
+ *   flags        KDRAY_MATERIAL_* bits */
+typedef struct KdMaterial {
+    kd_f32 diffuse[3];
+    kd_f32 shininess;
+    kd_f32 specular[3];
+    kd_f32 ior;
+    kd_f32 emission[3];
+    kd_f32 transmit_fraction;
+    kd_f32 filter[3];
+    kd_u32 flags;
+} KdMaterial;
+
+#define KDRAY_LIGHT_POINT 0u
+#define KDRAY_LIGHT_DIRECTIONAL 1u
+
+/* KdLight — 32 bytes. type KDRAY_LIGHT_*; vec: point position, or the unit direction a
+ * directional light travels; power: point intensity (falls off as 1/r^2) or directional
+ * irradiance; pad: 0. */
+typedef struct KdLight {
+    kd_u32 type;
+    kd_f32 vec[3];
+    kd_f32 power[3];
+    kd_u32 pad;
+} KdLight;
+
+/* KdView — 112 bytes: the camera basis of conventions.md and the frame's render settings.
+ *   origin, forward, right, up: camera position and unit basis; tan_half_fov = tan(fov_y / 2);
+ *   aspect = width / height; background colour; spp samples per pixel; max_depth <=
+ *   KDRAY_MAX_BOUNCES; light_count lights (0: a headlight along the view direction, no shadow
+ *   rays); effects KDRAY_EFFECT_* bits; seed for the sample jitter; ray_epsilon: how far
+ *   secondary rays start off the surface (scaled to the scene by the host); pad: 0. */
+typedef struct KdView {
+    kd_f32 origin[3];
+    kd_f32 tan_half_fov;
+    kd_f32 forward[3];
+    kd_f32 aspect;
+    kd_f32 right[3];
+    kd_u32 width;
+    kd_f32 up[3];
+    kd_u32 height;
+    kd_f32 background[3];
+    kd_u32 spp;
+    kd_u32 max_depth;
+    kd_u32 light_count;
+    kd_u32 effects;
+    kd_u32 seed;
+    kd_f32 ray_epsilon;
+    kd_u32 pad[3];
+} KdView;
+
+/* KdRayCounts — 16 bytes: rays cast for one pixel, by kind. */
+typedef struct KdRayCounts {
+    kd_u32 primary;
+    kd_u32 shadow;
+    kd_u32 reflection;
+    kd_u32 refraction;
+} KdRayCounts;
+
+#ifndef KDRAY_DEVICE_CODE
+static_assert(sizeof(KdMaterial) == 64, "KdMaterial is 64 bytes on every device");
+static_assert(sizeof(KdLight) == 32, "KdLight is 32 bytes on every device");
+static_assert(sizeof(KdView) == 112, "KdView is 112 bytes on every device");
+static_assert(sizeof(KdRayCounts) == 16, "KdRayCounts is 16 bytes on every device");
+#endif
+
+/* KdBuildNode — 32 bytes. A node of the OpenCL builder (Zhou et al. 2008) before its output stage
+ * lays the tree out in preorder. Node ids are handed out level by level, so a child's id is always
+ * larger than its parent's.
+ *   axis         inner: split axis 0/1/2; leaf: KDRAY_LEAF_AXIS.
+ *   split        inner: split plane position.
+ *   child[2]     inner: node ids of the below and above children.
+ *   leaf_count   leaf: number of triangles.
+ *   leaf_first   leaf with mask 0: first entry of its run in the builder's leaf reference store;
+ *                leaf with mask != 0: index of the small root whose triangles the mask selects.
+ *   mask_lo/hi   leaf of the small-node stage: bit i selects the small root's i-th triangle. */
+typedef struct KdBuildNode {
+    kd_u32 axis;
+    kd_f32 split;
+    kd_u32 child[2];
+    kd_u32 leaf_count;
+    kd_u32 leaf_first;
+    kd_u32 mask_lo;
+    kd_u32 mask_hi;
+} KdBuildNode;
+
+#ifndef KDRAY_DEVICE_CODE
+static_assert(sizeof(KdBuildNode) == 32, "KdBuildNode is 32 bytes on every device");
 #endif
 
 #endif /* KDRAY_KD_SHARED_H */

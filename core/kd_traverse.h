@@ -10,7 +10,10 @@
 
 #include "core/kd_shared.h"
 
-#ifdef __OPENCL_VERSION__
+#ifdef KDRAY_DEVICE_CODE
+/* Host and device must round alike for identical hits: no contraction into FMA (GCC with
+ * -std=c++20 does not contract either). */
+#pragma OPENCL FP_CONTRACT OFF
 #define KDRAY_GLOBAL __global
 #define KDRAY_FMIN fmin
 #define KDRAY_FMAX fmax
@@ -134,14 +137,15 @@ typedef struct KdTraversalEntry {
     kd_f32 tmin, tmax;
 } KdTraversalEntry;
 
-/* Nearest hit of `ray` in the tree. bounds: the root box as lo.xyz, hi.xyz. The stack has
+/* Nearest hit of `ray` in the tree or, with any_hit, the first hit found in [tmin, tmax) (shadow
+ * rays need no more). bounds: the root box as lo.xyz, hi.xyz. The stack has
  * KDRAY_MAX_DEPTH entries: one push per inner node on the current path, and builders never make a
  * path deeper than that. Hits are accepted wherever they lie on the ray (a triangle in a leaf may
  * extend beyond it); the walk ends when the best hit is nearer than the next node's entry. */
-KDRAY_INLINE KdHit kd_trace_closest(KDRAY_GLOBAL const KdNode* nodes,
-                                    KDRAY_GLOBAL const kd_u32* leaf_indices,
-                                    KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
-                                    KdRay ray) {
+KDRAY_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
+                            KDRAY_GLOBAL const kd_u32* leaf_indices,
+                            KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds, KdRay ray,
+                            int any_hit) {
     KdHit hit;
     hit.t = ray.tmax;
     hit.prim = KDRAY_NO_HIT;
@@ -199,8 +203,10 @@ KDRAY_INLINE KdHit kd_trace_closest(KDRAY_GLOBAL const KdNode* nodes,
         const kd_u32 count = kd_leaf_count(node), offset = kd_leaf_offset(node);
         for (kd_u32 i = 0; i < count; ++i) {
             const kd_u32 id = leaf_indices[offset + i];
-            kd_intersect_triangle(&p, triangles + (size_t)id * KDRAY_FLOATS_PER_TRIANGLE, id,
-                                  ray.tmin, &hit);
+            if (kd_intersect_triangle(&p, triangles + (size_t)id * KDRAY_FLOATS_PER_TRIANGLE, id,
+                                      ray.tmin, &hit) &&
+                any_hit)
+                return hit;
         }
         if (stack_size == 0) break;
         --stack_size;
@@ -210,6 +216,21 @@ KDRAY_INLINE KdHit kd_trace_closest(KDRAY_GLOBAL const KdNode* nodes,
     }
     if (hit.prim == KDRAY_NO_HIT) hit.t = KDRAY_INF;
     return hit;
+}
+
+KDRAY_INLINE KdHit kd_trace_closest(KDRAY_GLOBAL const KdNode* nodes,
+                                    KDRAY_GLOBAL const kd_u32* leaf_indices,
+                                    KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
+                                    KdRay ray) {
+    return kd_trace(nodes, leaf_indices, triangles, bounds, ray, 0);
+}
+
+/* 1 when anything blocks the ray within [tmin, tmax). */
+KDRAY_INLINE int kd_trace_occluded(KDRAY_GLOBAL const KdNode* nodes,
+                                   KDRAY_GLOBAL const kd_u32* leaf_indices,
+                                   KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
+                                   KdRay ray) {
+    return kd_trace(nodes, leaf_indices, triangles, bounds, ray, 1).prim != KDRAY_NO_HIT;
 }
 
 #endif /* KDRAY_KD_TRAVERSE_H */

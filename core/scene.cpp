@@ -1,17 +1,44 @@
 #include "core/scene.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
 
 namespace kdray {
 
-bool Material::reflects() const {
-    return illum == 3 || illum == 5 || transmits();
+namespace {
+
+float largest(Vec3 v) {
+    return std::max({v.x, v.y, v.z});
 }
 
-bool Material::transmits() const {
-    return illum == 4 || illum == 6 || illum == 7 || dissolve < 1.0f;
+bool is_dielectric_model(int illum) {
+    return illum == 4 || illum == 6 || illum == 7;
+}
+
+bool tf_marks_glass(const Material& m) {
+    float tf = largest(m.transmission);
+    return tf > 0.0f && tf < 1.0f;
+}
+
+}  // namespace
+
+bool Material::is_mirror() const {
+    return (illum == 3 || illum == 5) && largest(specular) > 0.0f;
+}
+
+float Material::transmit_fraction() const {
+    if (is_dielectric_model(illum)) return 1.0f;
+    if (dissolve < 1.0f) return std::clamp(1.0f - dissolve, 0.0f, 1.0f);
+    if (tf_marks_glass(*this)) return largest(transmission);
+    return 0.0f;
+}
+
+Vec3 Material::transmission_filter() const {
+    if (!is_dielectric_model(illum) && dissolve >= 1.0f && tf_marks_glass(*this))
+        return transmission / largest(transmission);
+    return {1.0f, 1.0f, 1.0f};
 }
 
 Aabb Scene::bounds() const {

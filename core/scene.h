@@ -25,11 +25,18 @@ struct Material {
     Vec3 emission{0, 0, 0};          // Ke
     int illum = 2;                   // MTL illumination model
 
-    /// Ideal mirror reflection: illum 3 or 5 (ray-traced reflection), or the reflective part of a
-    /// dielectric.
-    bool reflects() const;
-    /// Dielectric refraction: illum 4, 6 or 7, or a dissolve below 1.
-    bool transmits() const;
+    /// Ideal mirror reflection weighted by Ks: illum 3 or 5 with a non-zero Ks.
+    bool is_mirror() const;
+    /// The share of light that meets the dielectric (Fresnel reflection and refraction): 1 for
+    /// illum 4, 6 and 7; 1 - d for d < 1; and, for exporters that mark glass only by Tf (BART),
+    /// the largest Tf component when it lies strictly between 0 and 1 (Tf 1 1 1 is the common
+    /// "no filter" default of opaque materials). 0 for opaque materials.
+    float transmit_fraction() const;
+    /// Colour of the transmitted light: Tf normalised, where Tf marked the glass; else white.
+    Vec3 transmission_filter() const;
+    bool transmits() const { return transmit_fraction() > 0.0f; }
+    /// Spawns reflection rays: a mirror, or a dielectric's Fresnel reflection.
+    bool reflects() const { return is_mirror() || transmits(); }
     bool emits() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
     bool has_highlight() const {
         return (specular.x > 0 || specular.y > 0 || specular.z > 0) && shininess > 0;

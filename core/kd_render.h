@@ -1,0 +1,333 @@
+/* kd_render.h — camera rays and shading, written once in the C subset that compiles as C++ (the
+ * reference renderer) and as OpenCL C (the render kernel), as pbrt-v4 shares its integrators
+ * between CPU and GPU. The reference image is therefore the oracle for the OpenCL image: the same
+ * samples, the same rays, the same arithmetic.
+ *
+ * Shading is Whitted-style: emission, Lambert diffuse and a Blinn-Phong highlight under point and
+ * directional lights with shadow rays, ideal mirror reflection, and dielectric reflection and
+ * refraction weighted by the Fresnel equations, up to the render file's max_depth. Which of
+ * shadows, reflection and refraction exist at all is decided per frame from its materials and
+ * lights: in a kernel by -DKDRAY_COMPILED_EFFECTS (code a scene does not call for is not even
+ * compiled), on the host by KdView.effects.
+ */
+#ifndef KDRAY_KD_RENDER_H
+#define KDRAY_KD_RENDER_H
+
+#include "core/kd_shared.h"
+#include "core/kd_traverse.h"
+
+#ifdef KDRAY_DEVICE_CODE
+#ifndef KDRAY_COMPILED_EFFECTS
+#error "render kernels need -DKDRAY_COMPILED_EFFECTS=<KDRAY_EFFECT_* bits>"
+#endif
+#define KDRAY_EFFECT_ON(view, bit) ((KDRAY_COMPILED_EFFECTS & (bit)) != 0u)
+#define KDRAY_SQRT sqrt
+#define KDRAY_POW pow
+#else
+#define KDRAY_EFFECT_ON(view, bit) (((view)->effects & (bit)) != 0u)
+#define KDRAY_SQRT std::sqrt
+#define KDRAY_POW std::pow
+#endif
+
+#define KDRAY_PI 3.14159265358979323846f
+/* A path whose weight falls below this adds nothing visible; it is not followed. */
+#define KDRAY_MIN_PATH_WEIGHT 1e-3f
+
+/* Scene buffers as both sides hold them. */
+typedef struct KdSceneView {
+    KDRAY_GLOBAL const KdNode* nodes;
+    KDRAY_GLOBAL const kd_u32* leaf_indices;
+    KDRAY_GLOBAL const kd_f32* triangles;
+    KDRAY_GLOBAL const kd_u32* material_ids;
+    KDRAY_GLOBAL const KdMaterial* materials;
+    KDRAY_GLOBAL const KdLight* lights;
+    kd_f32 bounds[6];
+} KdSceneView;
+
+/* What one pixel produces. */
+typedef struct KdPixel {
+    kd_f32 rgb[3];
+    KdHit centre_hit; /* the AOV: the hit of the ray through the pixel centre */
+    kd_f32 normal[3]; /* geometric normal of centre_hit, facing the ray (0 on a miss) */
+    KdRayCounts rays;
+} KdPixel;
+
+KDRAY_INLINE void kd_set3(kd_f32* out, kd_f32 x, kd_f32 y, kd_f32 z) {
+    out[0] = x;
+    out[1] = y;
+    out[2] = z;
+}
+KDRAY_INLINE kd_f32 kd_dot3(const kd_f32* a, const kd_f32* b) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+/* Unit vector, computed as Embree's peer does (multiply by 1 / length), so that centre rays
+ * match it bit for bit. */
+KDRAY_INLINE void kd_normalize3(kd_f32* a) {
+    const kd_f32 inv = 1.0f / KDRAY_SQRT(kd_dot3(a, a));
+    kd_set3(a, a[0] * inv, a[1] * inv, a[2] * inv);
+}
+
+/* The ray through image position (px, py) in pixels, conventions.md's camera model, evaluated in
+ * the same order as ../shared/peers/embree: d = normalize(f + (r * sx + u * sy)). */
+KDRAY_INLINE KdRay kd_camera_ray(const KdView* view, kd_f32 px, kd_f32 py) {
+    const kd_f32 sx = (2.0f * px / (kd_f32)view->width - 1.0f) * view->tan_half_fov * view->aspect;
+    const kd_f32 sy = (1.0f - 2.0f * py / (kd_f32)view->height) * view->tan_half_fov;
+    KdRay ray;
+    for (int a = 0; a < 3; ++a) {
+        ray.org[a] = view->origin[a];
+        ray.dir[a] = view->forward[a] + (view->right[a] * sx + view->up[a] * sy);
+    }
+    kd_normalize3(ray.dir);
+    ray.tmin = 0.0f;
+    ray.tmax = KDRAY_INF;
+    return ray;
+}
+
+/* A 32-bit integer hash (Wellons' lowbias32): decorrelated jitter without per-pixel state. */
+KDRAY_INLINE kd_u32 kd_hash(kd_u32 x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+KDRAY_INLINE kd_f32 kd_unit_float(kd_u32 h) {
+    return (kd_f32)(h >> 8) * (1.0f / 16777216.0f);
+}
+
+/* Geometric unit normal of a triangle, facing against `dir`. */
+KDRAY_INLINE void kd_facing_normal(KDRAY_GLOBAL const kd_f32* tri, const kd_f32* dir, kd_f32* n) {
+    const kd_f32 e1[3] = {tri[3] - tri[0], tri[4] - tri[1], tri[5] - tri[2]};
+    const kd_f32 e2[3] = {tri[6] - tri[0], tri[7] - tri[1], tri[8] - tri[2]};
+    kd_set3(n, e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0]);
+    kd_normalize3(n);
+    if (kd_dot3(n, dir) > 0.0f) kd_set3(n, -n[0], -n[1], -n[2]);
+}
+
+/* Unpolarised Fresnel reflectance of a dielectric for cos_i = cos(incidence) > 0 and
+ * eta = n_incident / n_transmitted; 1 on total internal reflection. *cos_t returns the
+ * transmitted angle's cosine. */
+KDRAY_INLINE kd_f32 kd_fresnel(kd_f32 cos_i, kd_f32 eta, kd_f32* cos_t) {
+    const kd_f32 sin2_t = eta * eta * (1.0f - cos_i * cos_i);
+    if (sin2_t >= 1.0f) {
+        *cos_t = 0.0f;
+        return 1.0f;
+    }
+    *cos_t = KDRAY_SQRT(1.0f - sin2_t);
+    const kd_f32 r_s = (eta * cos_i - *cos_t) / (eta * cos_i + *cos_t);
+    const kd_f32 r_p = (cos_i - eta * *cos_t) / (cos_i + eta * *cos_t);
+    return 0.5f * (r_s * r_s + r_p * r_p);
+}
+
+/* A ray waiting to be traced, with the share of the pixel it carries. */
+typedef struct KdPendingRay {
+    KdRay ray;
+    kd_f32 weight[3];
+    kd_u32 depth; /* 1 for primary rays */
+    kd_u32 kind;  /* 0 primary, 1 reflection, 2 refraction */
+} KdPendingRay;
+
+KDRAY_INLINE KdPendingRay kd_pending(const kd_f32* org, const kd_f32* dir, const kd_f32* weight,
+                                     kd_u32 depth, kd_u32 kind) {
+    KdPendingRay r;
+    for (int a = 0; a < 3; ++a) {
+        r.ray.org[a] = org[a];
+        r.ray.dir[a] = dir[a];
+        r.weight[a] = weight[a];
+    }
+    r.ray.tmin = 0.0f;
+    r.ray.tmax = KDRAY_INF;
+    r.depth = depth;
+    r.kind = kind;
+    return r;
+}
+
+/* Direct light at p (normal n, facing the viewer) for the eye direction `dir`: diffuse and
+ * highlight under every light, each behind a shadow ray when shadows are on. */
+KDRAY_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
+                                  KDRAY_GLOBAL const KdMaterial* m, const kd_f32* p,
+                                  const kd_f32* n, const kd_f32* dir, kd_f32* out,
+                                  KdRayCounts* rays) {
+    const kd_u32 lights = view->light_count == 0u ? 1u : view->light_count;
+    for (kd_u32 i = 0; i < lights; ++i) {
+        kd_f32 to_light[3], irradiance[3], distance = KDRAY_INF;
+        if (view->light_count == 0u) {
+            /* No lights in the render file: a headlight, which casts no visible shadow. */
+            kd_set3(to_light, -view->forward[0], -view->forward[1], -view->forward[2]);
+            kd_set3(irradiance, 1.0f, 1.0f, 1.0f);
+        } else {
+            KDRAY_GLOBAL const KdLight* light = scene->lights + i;
+            if (light->type == KDRAY_LIGHT_POINT) {
+                kd_set3(to_light, light->vec[0] - p[0], light->vec[1] - p[1], light->vec[2] - p[2]);
+                const kd_f32 d2 = kd_dot3(to_light, to_light);
+                distance = KDRAY_SQRT(d2);
+                kd_set3(to_light, to_light[0] / distance, to_light[1] / distance,
+                        to_light[2] / distance);
+                kd_set3(irradiance, light->power[0] / d2, light->power[1] / d2,
+                        light->power[2] / d2);
+            } else {
+                kd_set3(to_light, -light->vec[0], -light->vec[1], -light->vec[2]);
+                kd_set3(irradiance, light->power[0], light->power[1], light->power[2]);
+            }
+        }
+        const kd_f32 cos_l = kd_dot3(n, to_light);
+        if (cos_l <= 0.0f) continue;
+        if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_SHADOWS) && view->light_count != 0u) {
+            KdRay shadow;
+            for (int a = 0; a < 3; ++a) {
+                shadow.org[a] = p[a] + n[a] * view->ray_epsilon;
+                shadow.dir[a] = to_light[a];
+            }
+            shadow.tmin = 0.0f;
+            shadow.tmax = distance - view->ray_epsilon;
+            rays->shadow += 1u;
+            if (kd_trace_occluded(scene->nodes, scene->leaf_indices, scene->triangles,
+                                  scene->bounds, shadow))
+                continue;
+        }
+        kd_f32 highlight = 0.0f;
+        if (m->flags & KDRAY_MATERIAL_HIGHLIGHT) {
+            kd_f32 h[3] = {to_light[0] - dir[0], to_light[1] - dir[1], to_light[2] - dir[2]};
+            kd_normalize3(h);
+            const kd_f32 cos_h = kd_dot3(n, h);
+            /* Normalised Blinn-Phong: (Ns + 8) / (8 pi) keeps the highlight's energy fixed. */
+            if (cos_h > 0.0f)
+                highlight =
+                    (m->shininess + 8.0f) / (8.0f * KDRAY_PI) * KDRAY_POW(cos_h, m->shininess);
+        }
+        for (int c = 0; c < 3; ++c)
+            out[c] +=
+                (m->diffuse[c] / KDRAY_PI + m->specular[c] * highlight) * irradiance[c] * cos_l;
+    }
+}
+
+/* Traces one sample's ray tree from the primary ray and returns its colour. The pending stack
+ * holds at most one ray per level: each traced ray pushes at most two, one of which is traced
+ * next. */
+KDRAY_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* view, KdRay primary,
+                                  kd_f32* rgb, KdRayCounts* rays, KdHit* first_hit,
+                                  kd_f32* first_normal) {
+    KdPendingRay stack[KDRAY_MAX_BOUNCES + 1];
+    const kd_f32 one[3] = {1.0f, 1.0f, 1.0f};
+    stack[0] = kd_pending(primary.org, primary.dir, one, 1u, 0u);
+    int pending = 1;
+    kd_set3(rgb, 0.0f, 0.0f, 0.0f);
+    while (pending > 0) {
+        const KdPendingRay r = stack[--pending];
+        if (r.kind == 0u)
+            rays->primary += 1u;
+        else if (r.kind == 1u)
+            rays->reflection += 1u;
+        else
+            rays->refraction += 1u;
+        const KdHit hit = kd_trace_closest(scene->nodes, scene->leaf_indices, scene->triangles,
+                                           scene->bounds, r.ray);
+        kd_f32 n[3] = {0.0f, 0.0f, 0.0f};
+        KDRAY_GLOBAL const kd_f32* tri = scene->triangles;
+        if (hit.prim != KDRAY_NO_HIT) {
+            tri += (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE;
+            kd_facing_normal(tri, r.ray.dir, n);
+        }
+        if (r.kind == 0u && first_hit) {
+            *first_hit = hit;
+            kd_set3(first_normal, n[0], n[1], n[2]);
+        }
+        if (hit.prim == KDRAY_NO_HIT) {
+            for (int c = 0; c < 3; ++c) rgb[c] += r.weight[c] * view->background[c];
+            continue;
+        }
+
+        /* Emission and direct light on the part of the surface that is not dielectric. */
+        KDRAY_GLOBAL const KdMaterial* m = scene->materials + scene->material_ids[hit.prim];
+        kd_f32 p[3], direct[3] = {0.0f, 0.0f, 0.0f};
+        for (int a = 0; a < 3; ++a) p[a] = r.ray.org[a] + hit.t * r.ray.dir[a];
+        const kd_f32 surface = 1.0f - m->transmit_fraction;
+        if (surface > 0.0f) kd_direct_light(scene, view, m, p, n, r.ray.dir, direct, rays);
+        for (int c = 0; c < 3; ++c) rgb[c] += r.weight[c] * (m->emission[c] + surface * direct[c]);
+        if (r.depth >= view->max_depth) continue;
+
+        /* Secondary rays: the mirror, and the dielectric's Fresnel-weighted pair. */
+        const kd_f32 cos_i = -kd_dot3(r.ray.dir, n);
+        kd_f32 reflect_dir[3], reflect_w[3] = {0.0f, 0.0f, 0.0f};
+        for (int a = 0; a < 3; ++a) reflect_dir[a] = r.ray.dir[a] + 2.0f * cos_i * n[a];
+        if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFLECTION) && (m->flags & KDRAY_MATERIAL_MIRROR))
+            for (int c = 0; c < 3; ++c) reflect_w[c] = r.weight[c] * surface * m->specular[c];
+        if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFRACTION) &&
+            (m->flags & KDRAY_MATERIAL_DIELECTRIC) && m->transmit_fraction > 0.0f) {
+            /* The geometric normal faces the ray, so the ray enters when it opposes the
+             * triangle's own winding normal; kdray's OBJ meshes give no inside/outside, so
+             * entering is judged from the winding: counter-clockwise faces outwards. */
+            const kd_f32 e1[3] = {tri[3] - tri[0], tri[4] - tri[1], tri[5] - tri[2]};
+            const kd_f32 e2[3] = {tri[6] - tri[0], tri[7] - tri[1], tri[8] - tri[2]};
+            const kd_f32 wn[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                  e1[0] * e2[1] - e1[1] * e2[0]};
+            const int entering = kd_dot3(wn, r.ray.dir) < 0.0f;
+            const kd_f32 eta = entering ? 1.0f / m->ior : m->ior;
+            kd_f32 cos_t;
+            const kd_f32 fresnel = kd_fresnel(cos_i, eta, &cos_t);
+            kd_f32 refract_w[3];
+            for (int c = 0; c < 3; ++c) {
+                const kd_f32 share = r.weight[c] * m->transmit_fraction * m->filter[c];
+                reflect_w[c] += share * fresnel;
+                refract_w[c] = share * (1.0f - fresnel);
+            }
+            if (fresnel < 1.0f && KDRAY_FMAX(refract_w[0], KDRAY_FMAX(refract_w[1], refract_w[2])) >
+                                      KDRAY_MIN_PATH_WEIGHT) {
+                kd_f32 org[3], dir[3];
+                for (int a = 0; a < 3; ++a) {
+                    dir[a] = eta * r.ray.dir[a] + (eta * cos_i - cos_t) * n[a];
+                    org[a] = p[a] - n[a] * view->ray_epsilon;
+                }
+                kd_normalize3(dir);
+                stack[pending++] = kd_pending(org, dir, refract_w, r.depth + 1u, 2u);
+            }
+        }
+        if (KDRAY_FMAX(reflect_w[0], KDRAY_FMAX(reflect_w[1], reflect_w[2])) >
+            KDRAY_MIN_PATH_WEIGHT) {
+            kd_f32 org[3];
+            for (int a = 0; a < 3; ++a) org[a] = p[a] + n[a] * view->ray_epsilon;
+            stack[pending++] = kd_pending(org, reflect_dir, reflect_w, r.depth + 1u, 1u);
+        }
+    }
+}
+
+/* One pixel: spp samples (the centre ray when spp is 1, else jittered inside the pixel), their
+ * mean colour, and the centre ray's hit for the AOV. */
+KDRAY_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView* view, kd_u32 x,
+                                     kd_u32 y) {
+    KdPixel out;
+    kd_set3(out.rgb, 0.0f, 0.0f, 0.0f);
+    out.rays.primary = out.rays.shadow = out.rays.reflection = out.rays.refraction = 0u;
+    const kd_f32 cx = (kd_f32)x + 0.5f, cy = (kd_f32)y + 0.5f;
+    if (view->spp > 1u) {
+        /* The AOV always comes from the centre ray (conventions.md), an extra primary ray. */
+        out.centre_hit = kd_trace_closest(scene->nodes, scene->leaf_indices, scene->triangles,
+                                          scene->bounds, kd_camera_ray(view, cx, cy));
+        out.rays.primary += 1u;
+        kd_set3(out.normal, 0.0f, 0.0f, 0.0f);
+        if (out.centre_hit.prim != KDRAY_NO_HIT) {
+            const KdRay centre = kd_camera_ray(view, cx, cy);
+            kd_facing_normal(
+                scene->triangles + (size_t)out.centre_hit.prim * KDRAY_FLOATS_PER_TRIANGLE,
+                centre.dir, out.normal);
+        }
+    }
+    for (kd_u32 s = 0; s < view->spp; ++s) {
+        kd_f32 px = cx, py = cy;
+        if (view->spp > 1u) {
+            const kd_u32 h = kd_hash((y * view->width + x) * 0x9E3779B9u ^ kd_hash(s + view->seed));
+            px = (kd_f32)x + kd_unit_float(h);
+            py = (kd_f32)y + kd_unit_float(kd_hash(h));
+        }
+        kd_f32 rgb[3];
+        kd_trace_sample(scene, view, kd_camera_ray(view, px, py), rgb, &out.rays,
+                        view->spp == 1u ? &out.centre_hit : 0, out.normal);
+        for (int c = 0; c < 3; ++c) out.rgb[c] += rgb[c];
+    }
+    for (int c = 0; c < 3; ++c) out.rgb[c] /= (kd_f32)view->spp;
+    return out;
+}
+
+#endif /* KDRAY_KD_RENDER_H */

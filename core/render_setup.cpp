@@ -1,0 +1,139 @@
+#include "core/render_setup.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace kdray {
+
+kd_u32 Effects::bits() const {
+    return (shadows ? KDRAY_EFFECT_SHADOWS : 0u) | (reflection ? KDRAY_EFFECT_REFLECTION : 0u) |
+           (refraction ? KDRAY_EFFECT_REFRACTION : 0u);
+}
+
+nlohmann::json Effects::to_json() const {
+    return {{"shadows", shadows},
+            {"reflection", reflection},
+            {"refraction", refraction},
+            {"reasons",
+             {{"shadows", shadows_reason},
+              {"reflection", reflection_reason},
+              {"refraction", refraction_reason}}}};
+}
+
+Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
+    Effects e;
+    std::set<kd_u32> used(scene.material_ids.begin(), scene.material_ids.end());
+    const Material* mirror = nullptr;
+    const Material* glass = nullptr;
+    for (kd_u32 id : used) {
+        const Material& m = scene.materials.at(id);
+        if (!mirror && m.is_mirror()) mirror = &m;
+        if (!glass && m.transmits()) glass = &m;
+    }
+    if (settings.lights.empty()) {
+        e.shadows_reason = "the render file has no lights (a headlight casts no visible shadow)";
+    } else {
+        e.shadows = true;
+        e.shadows_reason = std::to_string(settings.lights.size()) + " light(s)";
+    }
+    if (settings.max_depth < 2) {
+        e.reflection_reason = e.refraction_reason = "max_depth 1 allows no secondary rays";
+        return e;
+    }
+    if (mirror) {
+        e.reflection = true;
+        e.reflection_reason = "material '" + mirror->name + "' is a mirror";
+    } else if (glass) {
+        e.reflection = true;
+        e.reflection_reason = "material '" + glass->name + "' reflects as a dielectric";
+    } else {
+        e.reflection_reason = "no material reflects";
+    }
+    if (glass) {
+        e.refraction = true;
+        e.refraction_reason = "material '" + glass->name + "' transmits";
+    } else {
+        e.refraction_reason = "no material transmits";
+    }
+    return e;
+}
+
+KdMaterial to_device_material(const Material& m) {
+    KdMaterial d{};
+    Vec3 filter = m.transmission_filter();
+    for (int c = 0; c < 3; ++c) {
+        d.diffuse[c] = m.diffuse[c];
+        d.specular[c] = m.specular[c];
+        d.emission[c] = m.emission[c];
+        d.filter[c] = filter[c];
+    }
+    d.shininess = m.shininess;
+    d.ior = m.ior > 0.0f ? m.ior : 1.0f;  // BART writes Ni 0 for opaque materials
+    d.transmit_fraction = m.transmit_fraction();
+    d.flags = (m.is_mirror() ? KDRAY_MATERIAL_MIRROR : 0u) |
+              (m.transmits() ? KDRAY_MATERIAL_DIELECTRIC : 0u) |
+              (!m.is_mirror() && m.has_highlight() ? KDRAY_MATERIAL_HIGHLIGHT : 0u);
+    return d;
+}
+
+KdLight to_device_light(const Light& light) {
+    KdLight d{};
+    Vec3 v = light.type == Light::Type::point ? light.position : normalize(light.direction);
+    d.type = light.type == Light::Type::point ? KDRAY_LIGHT_POINT : KDRAY_LIGHT_DIRECTIONAL;
+    for (int c = 0; c < 3; ++c) {
+        d.vec[c] = v[c];
+        d.power[c] = light.intensity[c];
+    }
+    return d;
+}
+
+KdView make_view(const Camera& camera, const RenderSettings& settings, const Scene& scene,
+                 const Effects& effects, kd_u32 seed) {
+    // The basis in the peer's order: f = normalize(look_at - position), r = normalize(f x up),
+    // u = r x f, each normalised by multiplying with 1 / length.
+    auto unit = [](Vec3 v) { return v * (1.0f / std::sqrt(dot(v, v))); };
+    Vec3 f = unit(camera.look_at - camera.position);
+    Vec3 r = unit(cross(f, camera.up));
+    Vec3 u = cross(r, f);
+    KdView v{};
+    for (int a = 0; a < 3; ++a) {
+        v.origin[a] = camera.position[a];
+        v.forward[a] = f[a];
+        v.right[a] = r[a];
+        v.up[a] = u[a];
+        v.background[a] = settings.background[a];
+    }
+    v.tan_half_fov = std::tan(camera.fov_y * 0.5f * float(M_PI) / 180.0f);
+    v.aspect = float(settings.width) / float(settings.height);
+    v.width = kd_u32(settings.width);
+    v.height = kd_u32(settings.height);
+    v.spp = kd_u32(settings.spp);
+    v.max_depth = kd_u32(std::clamp(settings.max_depth, 1, KDRAY_MAX_BOUNCES));
+    v.light_count = kd_u32(settings.lights.size());
+    v.effects = effects.bits();
+    v.seed = seed;
+    // Secondary rays start a little off the surface: far enough to clear the rounding of the hit
+    // point (a few ulps of the largest coordinate), small against the scene.
+    Aabb b = scene.bounds();
+    float extent = b.empty() ? 1.0f : std::max({b.extent().x, b.extent().y, b.extent().z});
+    float magnitude = b.empty()
+                          ? 1.0f
+                          : std::max({std::fabs(b.lo.x), std::fabs(b.lo.y), std::fabs(b.lo.z),
+                                      std::fabs(b.hi.x), std::fabs(b.hi.y), std::fabs(b.hi.z)});
+    v.ray_epsilon = 1e-5f * extent + 5e-7f * magnitude;
+    return v;
+}
+
+RenderInputs prepare_render(const Scene& scene, const RenderSettings& settings,
+                            const Camera& camera, kd_u32 seed) {
+    RenderInputs in;
+    in.effects = decide_effects(scene, settings);
+    in.view = make_view(camera, settings, scene, in.effects, seed);
+    for (const Material& m : scene.materials) in.materials.push_back(to_device_material(m));
+    for (const Light& l : settings.lights) in.lights.push_back(to_device_light(l));
+    if (in.lights.empty()) in.lights.push_back(KdLight{});  // never a zero-size device buffer
+    return in;
+}
+
+}  // namespace kdray

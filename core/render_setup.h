@@ -1,0 +1,44 @@
+// render_setup.h — turns a frame's scene, render file and camera into what the shared shading of
+// kd_render.h reads (KdView, KdMaterial, KdLight), and decides which effects the frame calls for:
+// shadow rays only with lights, reflection only when a material reflects, refraction only when
+// one transmits. The decision and its reasons go to stats.json.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/kd_shared.h"
+#include "core/render_file.h"
+#include "core/scene.h"
+
+namespace kdray {
+
+struct Effects {
+    bool shadows = false, reflection = false, refraction = false;
+    std::string shadows_reason, reflection_reason, refraction_reason;
+
+    kd_u32 bits() const;
+    nlohmann::json to_json() const;
+};
+
+/// Looks only at the materials some triangle uses, and at the render file's lights and depth.
+Effects decide_effects(const Scene& scene, const RenderSettings& settings);
+
+KdMaterial to_device_material(const Material& material);
+KdLight to_device_light(const Light& light);
+/// Camera basis exactly as conventions.md (and the Embree peer) computes it.
+KdView make_view(const Camera& camera, const RenderSettings& settings, const Scene& scene,
+                 const Effects& effects, kd_u32 seed);
+
+struct RenderInputs {
+    KdView view;
+    std::vector<KdMaterial> materials;
+    std::vector<KdLight> lights;
+    Effects effects;
+};
+RenderInputs prepare_render(const Scene& scene, const RenderSettings& settings,
+                            const Camera& camera, kd_u32 seed);
+
+}  // namespace kdray
