@@ -1,0 +1,173 @@
+// device.cpp — platform/device enumeration and selection, and the context and queue of the chosen
+// device.
+#include "cl/device.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <filesystem>
+#include <system_error>
+
+#include <unistd.h>
+
+#include "cl/cl_error.h"
+#include "core/error.h"
+
+namespace kdray {
+namespace {
+
+std::string device_type_name(cl_device_type type) {
+    if (type & CL_DEVICE_TYPE_GPU) return "GPU";
+    if (type & CL_DEVICE_TYPE_CPU) return "CPU";
+    if (type & CL_DEVICE_TYPE_ACCELERATOR) return "accelerator";
+    return "other";
+}
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+}
+
+// PoCL keeps compiled kernels in $POCL_CACHE_DIR, else $XDG_CACHE_HOME/pocl, else
+// $HOME/.cache/pocl; its cache is what makes the second run of kdray skip the ~1 s compile. Where
+// that default is not writable (a sandbox with a read-only home), point it at the temporary
+// directory instead of letting every run recompile. Other implementations ignore the variable.
+void ensure_writable_kernel_cache() {
+    if (std::getenv("POCL_CACHE_DIR")) return;
+    std::filesystem::path base;
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
+        base = xdg;
+    else if (const char* home = std::getenv("HOME"); home && *home)
+        base = std::filesystem::path(home) / ".cache";
+    std::error_code ec;
+    if (!base.empty()) {
+        std::filesystem::create_directories(base, ec);
+        if (!ec && ::access(base.c_str(), W_OK) == 0) return;
+    }
+    const auto fallback = std::filesystem::temp_directory_path(ec) / "kdray-pocl-cache";
+    if (ec) return;
+    std::filesystem::create_directories(fallback, ec);
+    if (!ec) ::setenv("POCL_CACHE_DIR", fallback.c_str(), 0);
+}
+
+struct FoundDevice {
+    cl::Device device;
+    ClDeviceInfo info;
+};
+
+std::vector<FoundDevice> find_devices() {
+    ensure_writable_kernel_cache();
+    std::vector<cl::Platform> platforms;
+    // The ICD loader reports "no platform" as an error code (CL_PLATFORM_NOT_FOUND_KHR) rather than
+    // an empty list.
+    const cl_int status = cl::Platform::get(&platforms);
+    if (status != CL_SUCCESS || platforms.empty())
+        throw Error(
+            "no OpenCL platform found (clGetPlatformIDs: " + cl_error_name(status) +
+            "). Install an OpenCL implementation, e.g. PoCL for the CPU: "
+            "`apt-get install pocl-opencl-icd ocl-icd-opencl-dev`, or your GPU vendor's driver");
+    std::vector<FoundDevice> found;
+    for (const cl::Platform& platform : platforms) {
+        std::vector<cl::Device> devices;
+        try {
+            platform.getDevices(CL_DEVICE_TYPE_ALL, &devices);
+        } catch (const cl::Error& e) {
+            if (e.err() == CL_DEVICE_NOT_FOUND) continue;  // a platform with no device
+            throw_cl_error("listing OpenCL devices", e.what(), e.err());
+        }
+        const std::string platform_name = platform.getInfo<CL_PLATFORM_NAME>();
+        for (cl::Device& device : devices) {
+            ClDeviceInfo info;
+            info.index = static_cast<int>(found.size());
+            info.platform = platform_name;
+            info.name = device.getInfo<CL_DEVICE_NAME>();
+            info.vendor = device.getInfo<CL_DEVICE_VENDOR>();
+            info.type = device_type_name(device.getInfo<CL_DEVICE_TYPE>());
+            info.version = device.getInfo<CL_DEVICE_VERSION>();
+            info.compute_units = device.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
+            info.global_mem_bytes = device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
+            info.max_alloc_bytes = device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
+            // The C++ bindings keep the terminating NUL of string queries.
+            for (std::string* s : {&info.name, &info.vendor, &info.version})
+                while (!s->empty() && s->back() == '\0') s->pop_back();
+            found.push_back({device, info});
+        }
+    }
+    return found;
+}
+
+bool is_index(const std::string& s) {
+    return !s.empty() && s.size() < 6 &&
+           std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
+}
+
+std::vector<ClDeviceInfo> infos(const std::vector<FoundDevice>& found) {
+    std::vector<ClDeviceInfo> out;
+    for (const FoundDevice& f : found) out.push_back(f.info);
+    return out;
+}
+
+}  // namespace
+
+std::vector<ClDeviceInfo> list_cl_devices() {
+    return with_cl_context("listing OpenCL devices", [] { return infos(find_devices()); });
+}
+
+std::string describe_cl_devices(const std::vector<ClDeviceInfo>& devices) {
+    std::string s;
+    for (const ClDeviceInfo& d : devices)
+        s += "  " + std::to_string(d.index) + ": " + d.name + " (" + d.vendor + ", " + d.type +
+             ", " + d.version + ")\n";
+    return s;
+}
+
+ClDevice::ClDevice(const std::string& selector) {
+    with_cl_context("opening OpenCL device '" + selector + "'", [&] {
+        std::vector<FoundDevice> found = find_devices();
+        if (found.empty())
+            throw Error(
+                "OpenCL platforms exist but have no devices. Install an OpenCL implementation, "
+                "e.g. `apt-get install pocl-opencl-icd ocl-icd-opencl-dev`");
+        const FoundDevice* chosen = nullptr;
+        if (selector.empty()) {
+            for (const FoundDevice& f : found)
+                if (f.info.type == "GPU") {
+                    chosen = &f;
+                    break;
+                }
+            if (!chosen) chosen = &found.front();
+        } else if (is_index(selector)) {
+            const std::size_t index = std::stoul(selector);
+            if (index < found.size()) chosen = &found[index];
+        } else {
+            for (const FoundDevice& f : found)
+                if (lower(f.info.name).find(lower(selector)) != std::string::npos) {
+                    chosen = &f;
+                    break;
+                }
+        }
+        if (!chosen)
+            throw Error("no OpenCL device matches '" + selector +
+                        "' (give an index or a part of the name); the devices are:\n" +
+                        describe_cl_devices(infos(found)));
+        device_ = chosen->device;
+        info_ = chosen->info;
+        context_ = cl::Context(device_);
+        queue_ = cl::CommandQueue(context_, device_);  // in order, no profiling
+    });
+}
+
+cl::Buffer ClDevice::allocate(std::size_t bytes, const std::string& what) const {
+    const std::size_t size = std::max<std::size_t>(bytes, 1);
+    if (size > info_.max_alloc_bytes)
+        throw Error(what + ": " + std::to_string(size) + " bytes exceed the device's largest " +
+                    "allocation (CL_DEVICE_MAX_MEM_ALLOC_SIZE = " +
+                    std::to_string(info_.max_alloc_bytes) + " bytes) on " + info_.name);
+    cl_int status = CL_SUCCESS;
+    cl_mem mem = clCreateBuffer(context_(), CL_MEM_READ_WRITE, size, nullptr, &status);
+    if (status != CL_SUCCESS) throw_cl_allocation_error(what, size, status);
+    return cl::Buffer(mem);  // takes ownership of the one reference clCreateBuffer returned
+}
+
+}  // namespace kdray

@@ -1,0 +1,61 @@
+// device.h — the OpenCL device kdray runs on: listing every platform's devices (for `kdray stats`),
+// choosing one by index or name, and the context and in-order queue that the builder and tracer
+// share. Nothing here assumes a particular implementation: PoCL on a CPU and a vendor GPU driver
+// are reached the same way, through the ICD loader.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <CL/opencl.hpp>
+
+namespace kdray {
+
+/// One device as `kdray stats` reports it. `index` is its position in list_cl_devices(), the
+/// number that ClDevice's selector accepts.
+struct ClDeviceInfo {
+    int index = 0;
+    std::string platform;
+    std::string name;
+    std::string vendor;
+    std::string type;     // "GPU", "CPU", "accelerator", ...
+    std::string version;  // CL_DEVICE_VERSION, e.g. "OpenCL 3.0 PoCL ..."
+    unsigned compute_units = 0;
+    std::uint64_t global_mem_bytes = 0;
+    std::uint64_t max_alloc_bytes = 0;
+};
+
+/// Every device of every platform, in platform order. Throws Error, with the command that installs
+/// PoCL, when the ICD loader finds no platform at all.
+std::vector<ClDeviceInfo> list_cl_devices();
+
+/// An opened device: its context and one in-order command queue.
+class ClDevice {
+  public:
+    /// selector: "" picks the first GPU, or the first device when there is no GPU; a number picks
+    /// that index of list_cl_devices(); anything else picks the first device whose name contains
+    /// it (case-insensitive). Throws Error listing the devices when nothing matches.
+    explicit ClDevice(const std::string& selector = "");
+
+    const cl::Context& context() const { return context_; }
+    const cl::Device& device() const { return device_; }
+    cl::CommandQueue& queue() { return queue_; }
+    const ClDeviceInfo& info() const { return info_; }
+
+    /// A device buffer of `bytes` (at least 1, since OpenCL forbids empty buffers). Throws Error
+    /// naming `what` and the size when it exceeds CL_DEVICE_MAX_MEM_ALLOC_SIZE or fails.
+    cl::Buffer allocate(std::size_t bytes, const std::string& what) const;
+
+  private:
+    cl::Device device_;
+    cl::Context context_;
+    cl::CommandQueue queue_;
+    ClDeviceInfo info_;
+};
+
+/// A line per device for messages and `kdray stats`: "0: NAME (VENDOR, TYPE, VERSION)".
+std::string describe_cl_devices(const std::vector<ClDeviceInfo>& devices);
+
+}  // namespace kdray

@@ -1,0 +1,77 @@
+// primitives.cpp — host side of the scan, compaction and segmented reduction kernels.
+#include "cl/primitives.h"
+
+#include <algorithm>
+
+#include "cl/launch.h"
+#include "cl/program_cache.h"
+
+namespace kdray {
+
+std::string primitives_defines() {
+    return "-DKDRAY_REDUCE_CHUNK=" + std::to_string(kReduceChunk) + "u";
+}
+
+ClPrimitives::ClPrimitives(ClDevice& device) : device_(device) {
+    const cl::Program program = cached_program(device, "primitives.cl", primitives_defines());
+    scan_chunks_ = make_kernel(program, "kd_scan_chunks");
+    scan_single_ = make_kernel(program, "kd_scan_single");
+    add_chunk_offsets_ = make_kernel(program, "kd_add_chunk_offsets");
+    compact_by_flags_ = make_kernel(program, "kd_compact_by_flags");
+    reduce_box_chunks_ = make_kernel(program, "kd_reduce_box_chunks");
+    reduce_box_segments_ = make_kernel(program, "kd_reduce_box_segments");
+    count_box_chunks_ = make_kernel(program, "kd_count_box_chunks");
+}
+
+void ClPrimitives::exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, std::size_t n) {
+    cl::CommandQueue& queue = device_.queue();
+    // Chunk length: enough chunks to fill the device (a few hundred items per compute unit), at
+    // least 16 elements so the sequential loop amortises the launch, and one chunk for small n.
+    const std::size_t lanes = std::max<std::size_t>(1, device_.info().compute_units) * 256;
+    const std::size_t chunk = std::max<std::size_t>(16, (n + lanes - 1) / lanes);
+    if (n <= chunk) {
+        enqueue_kernel(queue, scan_single_, 1, in, out, cl_uint(n));
+        return;
+    }
+    // Scan: chunk sums, then the scan of the sums (recursively), then add the chunk offsets.
+    const std::size_t chunks = (n + chunk - 1) / chunk;
+    cl::Buffer sums = device_.allocate((chunks + 1) * sizeof(cl_uint), "scan chunk sums");
+    enqueue_kernel(queue, scan_chunks_, chunks, in, out, cl_uint(n), cl_uint(chunk),
+                   cl_uint(chunks), sums);
+    exclusive_scan(sums, sums, chunks);
+    enqueue_kernel(queue, add_chunk_offsets_, n, out, cl_uint(n), cl_uint(chunk), cl_uint(chunks),
+                   sums);
+}
+
+std::size_t ClPrimitives::compact(const cl::Buffer& values, const cl::Buffer& flags,
+                                  const cl::Buffer& out, std::size_t n) {
+    cl::Buffer positions = device_.allocate((n + 1) * sizeof(cl_uint), "compaction positions");
+    exclusive_scan(flags, positions, n);
+    enqueue_kernel(device_.queue(), compact_by_flags_, n, values, flags, positions, cl_uint(n),
+                   out);
+    cl_uint count = 0;
+    with_cl_context("reading the compacted count", [&] {
+        device_.queue().enqueueReadBuffer(positions, CL_TRUE, n * sizeof(cl_uint), sizeof(count),
+                                          &count);
+    });
+    return count;
+}
+
+void ClPrimitives::box_chunk_starts(const cl::Buffer& seg_count, std::size_t segments,
+                                    const cl::Buffer& chunk_start) {
+    enqueue_kernel(device_.queue(), count_box_chunks_, segments, seg_count, cl_uint(segments),
+                   chunk_start);
+    exclusive_scan(chunk_start, chunk_start, segments);
+}
+
+void ClPrimitives::reduce_box_segments(const cl::Buffer& boxes, const cl::Buffer& seg_start,
+                                       const cl::Buffer& seg_count, const cl::Buffer& chunk_start,
+                                       std::size_t segments, std::size_t total_chunks,
+                                       const cl::Buffer& chunk_boxes, const cl::Buffer& seg_boxes) {
+    enqueue_kernel(device_.queue(), reduce_box_chunks_, total_chunks, boxes, seg_start, seg_count,
+                   chunk_start, cl_uint(segments), cl_uint(total_chunks), chunk_boxes);
+    enqueue_kernel(device_.queue(), reduce_box_segments_, segments, chunk_boxes, chunk_start,
+                   cl_uint(segments), seg_boxes);
+}
+
+}  // namespace kdray

@@ -1,0 +1,54 @@
+// primitives.h — data-parallel primitives on the device (cl/kernels/primitives.cl): exclusive scan,
+// stream compaction and segmented box reduction, the building blocks of Zhou et al.'s (2008)
+// kd-tree construction. All calls only enqueue work on the device's in-order queue, except where a
+// count must come back to the host (compact).
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include <CL/opencl.hpp>
+
+#include "cl/device.h"
+
+namespace kdray {
+
+/// Elements per chunk of the segmented box reduction (primitives.cl's KDRAY_REDUCE_CHUNK).
+inline constexpr std::size_t kReduceChunk = 256;
+
+/// The -D options every program that uses the reduction's chunk size is built with.
+std::string primitives_defines();
+
+class ClPrimitives {
+  public:
+    explicit ClPrimitives(ClDevice& device);
+
+    /// out[k] = in[0] + ... + in[k-1] for k in [0, n], so out holds n + 1 uints and out[n] is the
+    /// total. out may be in. n may be 0 (out[0] = 0).
+    void exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, std::size_t n);
+
+    /// Writes the values[k] with flags[k] (0 or 1) != 0 to out, in order, and returns how many
+    /// (read back: it synchronises).
+    std::size_t compact(const cl::Buffer& values, const cl::Buffer& flags, const cl::Buffer& out,
+                        std::size_t n);
+
+    /// chunk_start[s] = first reduction chunk of segment s, for s in [0, segments] (segments + 1
+    /// uints, the last the total), from the segment sizes seg_count.
+    void box_chunk_starts(const cl::Buffer& seg_count, std::size_t segments,
+                          const cl::Buffer& chunk_start);
+
+    /// seg_boxes[s] = union of boxes[seg_start[s] .. seg_start[s] + seg_count[s]) (6 floats each,
+    /// lo.xyz hi.xyz; empty segments give lo = +inf, hi = -inf). chunk_start comes from
+    /// box_chunk_starts and total_chunks is its last entry; chunk_boxes holds total_chunks boxes.
+    void reduce_box_segments(const cl::Buffer& boxes, const cl::Buffer& seg_start,
+                             const cl::Buffer& seg_count, const cl::Buffer& chunk_start,
+                             std::size_t segments, std::size_t total_chunks,
+                             const cl::Buffer& chunk_boxes, const cl::Buffer& seg_boxes);
+
+  private:
+    ClDevice& device_;
+    cl::Kernel scan_chunks_, scan_single_, add_chunk_offsets_, compact_by_flags_;
+    cl::Kernel reduce_box_chunks_, reduce_box_segments_, count_box_chunks_;
+};
+
+}  // namespace kdray

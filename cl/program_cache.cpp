@@ -1,0 +1,64 @@
+// program_cache.cpp — the process-wide cache of built OpenCL programs.
+#include "cl/program_cache.h"
+
+#include <map>
+#include <mutex>
+#include <tuple>
+
+#include "cl/cl_error.h"
+#include "cl/embedded_kernels.h"
+#include "core/error.h"
+
+namespace kdray {
+namespace {
+
+using ProgramKey = std::tuple<cl_context, cl_device_id, std::string, std::string>;
+
+std::mutex cache_mutex;
+std::map<ProgramKey, cl::Program> cache;
+int builds = 0;
+
+}  // namespace
+
+cl::Program cached_program(const ClDevice& device, std::string_view file,
+                           const std::string& defines) {
+    const std::string options = "-cl-std=CL1.2" + (defines.empty() ? "" : " " + defines);
+    ProgramKey key{device.context()(), device.device()(), std::string(file), options};
+    std::lock_guard<std::mutex> lock(cache_mutex);
+    if (auto it = cache.find(key); it != cache.end()) return it->second;
+
+    const std::string what = "building OpenCL program " + std::string(file);
+    const std::string_view source = embedded_kernel_source(file);
+    cl::Program program =
+        with_cl_context(what, [&] { return cl::Program(device.context(), std::string(source)); });
+    const cl_device_id id = device.device()();
+    const cl_int status = clBuildProgram(program(), 1, &id, options.c_str(), nullptr, nullptr);
+    if (status != CL_SUCCESS) {
+        std::string log;
+        try {
+            log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device.device());
+        } catch (const cl::Error&) {
+            log = "(no build log available)";
+        }
+        while (!log.empty() && (log.back() == '\0' || log.back() == '\n')) log.pop_back();
+        throw Error(what + " for device '" + device.info().name + "' with options '" + options +
+                    "' failed with " + cl_error_name(status) + ":\n" + log);
+    }
+    ++builds;
+    cache.emplace(std::move(key), program);
+    return program;
+}
+
+cl::Kernel make_kernel(const cl::Program& program, const char* name) {
+    cl_int status = CL_SUCCESS;
+    cl_kernel kernel = clCreateKernel(program(), name, &status);
+    check_cl(status, std::string("creating OpenCL kernel ") + name, "clCreateKernel");
+    return cl::Kernel(kernel);
+}
+
+int program_build_count() {
+    std::lock_guard<std::mutex> lock(cache_mutex);
+    return builds;
+}
+
+}  // namespace kdray
