@@ -1,0 +1,326 @@
+// test_obj_loader.cpp — load_obj on small OBJ/MTL files written for each case, every kind of bad
+// input the pre-scan must reject (each message must name the file and the line), and the shared
+// scenes with the triangle counts of ../shared/scenes/SOURCES.md.
+#include <doctest/doctest.h>
+
+#include <unistd.h>
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/error.h"
+#include "core/scene.h"
+#include "tests/support.h"
+
+using namespace kdray;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A fresh folder under the system's temporary directory, removed with everything in it.
+class TempDir {
+  public:
+    TempDir() {
+        static std::atomic<int> counter{0};
+        path_ = fs::temp_directory_path() /
+                ("kdray_obj_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+        fs::create_directories(path_);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        fs::remove_all(path_, ec);
+    }
+    fs::path write(const std::string& name, const std::string& text) const {
+        std::ofstream(path_ / name, std::ios::binary) << text;
+        return path_ / name;
+    }
+
+  private:
+    fs::path path_;
+};
+
+/// The message load_obj throws for `text`, or "" when it loads.
+std::string load_error(const std::string& text, const std::string& name = "bad.obj") {
+    TempDir dir;
+    const fs::path path = dir.write(name, text);
+    try {
+        load_obj(path);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+const char* kTriangleVertices = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+
+}  // namespace
+
+TEST_CASE("triangles are numbered shape by shape, face by face") {
+    TempDir dir;
+    const fs::path path = dir.write("two.obj",
+                                    "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                                    "o first\nf 1 2 3\nf 1 2 4\n"
+                                    "o second\nf 2 3 4\n");
+    const Scene scene = load_obj(path);
+    REQUIRE(scene.triangle_count() == 3);
+    CHECK(scene.vertex(0, 2) == Vec3{0, 1, 0});
+    CHECK(scene.vertex(1, 2) == Vec3{0, 0, 1});
+    CHECK(scene.vertex(2, 0) == Vec3{1, 0, 0});
+    CHECK(scene.path == path);
+    CHECK(scene.warnings.empty());
+}
+
+TEST_CASE("quads and polygons are triangulated as tinyobjloader does") {
+    TempDir dir;
+    // tinyobjloader 2.0.0rc10 cuts a quad along its shorter diagonal: 0-2 gives the fan
+    // (0,1,2),(0,2,3); 1-3 gives (0,1,3),(1,2,3). An n-gon gives n - 2 triangles.
+    const fs::path path = dir.write("quads.obj",
+                                    "v 0 0 0\nv 3 0 0\nv 2 1 0\nv 0 1 0\n"  // 0-2 shorter
+                                    "v 0 0 1\nv 1 0 1\nv 3 1 1\nv 0 1 1\n"  // 1-3 shorter
+                                    "v 0 0 2\nv 2 0 2\nv 3 1 2\nv 1 2 2\nv -1 1 2\n"
+                                    "f 1 2 3 4\nf 5 6 7 8\nf 9 10 11 12 13\n");
+    const Scene scene = load_obj(path);
+    REQUIRE(scene.triangle_count() == 7);
+    CHECK(scene.vertex(0, 0) == Vec3{0, 0, 0});
+    CHECK(scene.vertex(0, 2) == Vec3{2, 1, 0});
+    CHECK(scene.vertex(1, 1) == Vec3{2, 1, 0});
+    CHECK(scene.vertex(1, 2) == Vec3{0, 1, 0});
+    CHECK(scene.vertex(2, 2) == Vec3{0, 1, 1});
+    CHECK(scene.vertex(3, 0) == Vec3{1, 0, 1});
+    CHECK(scene.vertex(3, 1) == Vec3{3, 1, 1});
+    for (std::size_t t = 4; t < 7; ++t) CHECK(scene.vertex(t, 0).z == 2.0f);
+}
+
+TEST_CASE("negative indices, tabs, CRLF line ends and comments") {
+    TempDir dir;
+    // As in CornellBox-Original.obj: relative indices only, `v<TAB>x y z`.
+    const fs::path path = dir.write("rel.obj",
+                                    "# comment\r\nv\t0 0 0\r\nv  1 0 0 # trailing\r\nv\t0 1 0\r\n"
+                                    "f -3 -2 -1\r\nv 0 0 5\r\nf -4 -1 -2\r\n");
+    const Scene scene = load_obj(path);
+    REQUIRE(scene.triangle_count() == 2);
+    CHECK(scene.vertex(0, 0) == Vec3{0, 0, 0});
+    CHECK(scene.vertex(1, 1) == Vec3{0, 0, 5});
+    CHECK(scene.vertex(1, 2) == Vec3{0, 1, 0});
+}
+
+TEST_CASE("v/vt/vn face forms and vertex colours load") {
+    TempDir dir;
+    const fs::path path = dir.write("forms.obj",
+                                    "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 1 1 0 1\n"
+                                    "vt 0 0\nvt 1 0\nvn 0 0 1\n"
+                                    "f 1/1 2/2 3/1\nf 2//1 4//1 3//1\nf 1/1/1 2/2/1 -1/-1/-1\n");
+    CHECK(load_obj(path).triangle_count() == 3);
+}
+
+TEST_CASE("materials come from the MTL file, every field") {
+    TempDir dir;
+    dir.write("m.mtl",
+              "newmtl shiny\nKd 0.1 0.2 0.3\nKs 0.4 0.5 0.6\nNs 77\nNi 1.33\nd 0.25\n"
+              "Tf 0.7 0.8 0.9\nKe 1 2 3\nillum 7\n"
+              "newmtl tr_only\nKd 1 1 1\nTr 0.25\nillum 2\n"
+              "newmtl both\nd 1\nTr 0.5\nillum 3\n");
+    const fs::path path = dir.write("m.obj", std::string("mtllib m.mtl\n") + kTriangleVertices +
+                                                 "usemtl both\nf 1 2 3\nusemtl shiny\nf 1 2 3\n"
+                                                 "usemtl tr_only\nf 1 2 3\n");
+    const Scene scene = load_obj(path);
+    REQUIRE(scene.materials.size() == 3);  // no default: every triangle has a material
+    const Material& m = scene.materials[0];
+    CHECK(m.name == "shiny");
+    CHECK(m.diffuse == Vec3{0.1f, 0.2f, 0.3f});
+    CHECK(m.specular == Vec3{0.4f, 0.5f, 0.6f});
+    CHECK(m.shininess == 77.0f);
+    CHECK(m.ior == 1.33f);
+    CHECK(m.dissolve == 0.25f);
+    CHECK(m.transmission == Vec3{0.7f, 0.8f, 0.9f});
+    CHECK(m.emission == Vec3{1, 2, 3});
+    CHECK(m.illum == 7);
+    CHECK(scene.materials[1].dissolve == doctest::Approx(0.75f));  // d = 1 - Tr
+    CHECK(scene.materials[2].dissolve == 1.0f);                    // d wins over Tr
+    CHECK(scene.materials[2].illum == 3);
+    CHECK(scene.material_ids == std::vector<kd_u32>{2, 0, 1});
+    // tinyobjloader's note about d and Tr becomes one warning line naming the file.
+    REQUIRE(scene.warnings.size() == 1);
+    CHECK(scene.warnings[0].find(path.string()) == 0);
+    CHECK(scene.warnings[0].find("d and Tr") != std::string::npos);
+}
+
+TEST_CASE("the grey default material is appended only when a triangle needs it") {
+    TempDir dir;
+    dir.write("one.mtl", "newmtl red\nKd 1 0 0\n");
+    const fs::path mixed =
+        dir.write("mixed.obj", std::string("mtllib one.mtl\n") + kTriangleVertices +
+                                   "f 1 2 3\nusemtl red\nf 1 2 3\n");
+    const Scene scene = load_obj(mixed);
+    REQUIRE(scene.materials.size() == 2);
+    CHECK(scene.materials[0].name == "red");
+    CHECK(scene.materials[1].diffuse == Vec3{0.8f, 0.8f, 0.8f});
+    CHECK(scene.material_ids == std::vector<kd_u32>{1, 0});
+
+    const fs::path plain = dir.write("plain.obj", std::string(kTriangleVertices) + "f 1 2 3\n");
+    const Scene no_mtl = load_obj(plain);
+    REQUIRE(no_mtl.materials.size() == 1);
+    CHECK(no_mtl.material_ids == std::vector<kd_u32>{0});
+}
+
+TEST_CASE("a missing MTL file is a warning, not an error") {
+    TempDir dir;
+    const fs::path path = dir.write("nomtl.obj", std::string("mtllib gone.mtl\n") +
+                                                     kTriangleVertices + "usemtl red\nf 1 2 3\n");
+    const Scene scene = load_obj(path);
+    CHECK(scene.triangle_count() == 1);
+    REQUIRE(scene.materials.size() == 1);
+    CHECK(scene.material_ids[0] == 0);
+    // One line that names the file, the mtllib line and the library; tinyobjloader's follow-up
+    // notes ("material not found") are covered by it.
+    REQUIRE(scene.warnings.size() == 1);
+    CHECK(scene.warnings[0] == path.string() +
+                                   ":1: material library 'gone.mtl' not found; using a grey "
+                                   "default material");
+}
+
+TEST_CASE("zero-area triangles are kept and counted") {
+    TempDir dir;
+    const fs::path path = dir.write(
+        "zero.obj", std::string(kTriangleVertices) + "v 2 0 0\nf 1 2 3\nf 1 2 4\nf 1 1 3\n");
+    const Scene scene = load_obj(path);
+    CHECK(scene.triangle_count() == 3);
+    CHECK(scene.zero_area_triangles == 2);
+}
+
+TEST_CASE("bad input fails with the file, the line and the problem") {
+    struct Case {
+        const char* why;
+        std::string text;
+        std::string message;  // after "bad.obj:"
+    };
+    const std::string tri = kTriangleVertices;
+    const Case cases[] = {
+        {"tinyobjloader reads nan as 0", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n",
+         "2: vertex coordinate 'nan' is not a finite number"},
+        {"inf", "v 0 0 0\nv 1 -inf 0\nv 0 1 0\nf 1 2 3\n",
+         "2: vertex coordinate '-inf' is not a finite number"},
+        {"1e999 overflows a double", "v 0 0 0\nv 1 0 0\nv 0 1e999 0\nf 1 2 3\n",
+         "3: vertex coordinate '1e999' is not a finite number"},
+        {"1e39 overflows a float", "v 0 0 0\nv 1 0 0\nv 0 1e39 0\nf 1 2 3\n",
+         "3: vertex coordinate '1e39' is not a finite number as a 32-bit float"},
+        {"garbage number", "v 0 0 0\nv 1 0x 0\nv 0 1 0\nf 1 2 3\n",
+         "2: vertex coordinate '0x' is not a number"},
+        {"too few coordinates", "v 0 0\n", "1: vertex has 2 numbers"},
+        {"index 0", tri + "f 0 1 2\n", "4: face vertex index 0 is invalid"},
+        {"index past the end", tri + "f 1 2 4\n",
+         "4: face vertex index 4 is out of range: the file has 3 vertices"},
+        {"negative index before the start", "v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n",
+         "3: face vertex index -3 reaches before the first vertex: only 2 vertices are defined "
+         "before this line"},
+        {"texture coordinate index past the end", tri + "vt 0 0\nf 1/1 2/2 3/1\n",
+         "5: face texture coordinate index 2 is out of range: the file has 1 texture "
+         "coordinates"},
+        {"normal index past the end", tri + "f 1//1 2//1 3//1\n",
+         "4: face normal index 1 is out of range: the file has 0 normals"},
+        {"negative normal index", tri + "vn 0 0 1\nf 1//-2 2//-1 3//-1\n",
+         "5: face normal index -2 reaches before the first normal"},
+        {"two-vertex face", tri + "f 1 2\n", "4: face has 2 vertices; a face needs at least 3"},
+        {"malformed face vertex", tri + "f 1/ 2 3\n", "4: face vertex '1/' is malformed"},
+        {"garbage index", tri + "f 1 2 three\n", "4: face vertex index 'three'"},
+        {"binary bytes",
+         tri + std::string("f 1 2 3\n\x7f"
+                           "ELF\x02\x01\x01\x00",
+                           16),
+         "5: unexpected byte \\x02: this is not a text OBJ file"},
+        {"a text file that is not OBJ", "hello world\n", "1: unknown statement 'hello'"},
+        {"no triangles", "", " the scene has no triangles"},
+        {"vertices only", tri, " the scene has no triangles"},
+    };
+    for (const Case& c : cases) {
+        CAPTURE(c.why);
+        const std::string message = load_error(c.text);
+        CHECK(message.find("bad.obj:" + c.message) != std::string::npos);
+        // The message starts with the full path, so the user knows which file of a sequence.
+        CHECK(message.find(fs::temp_directory_path().string()) == 0);
+    }
+}
+
+TEST_CASE("a missing or unreadable file fails with the reason") {
+    const fs::path missing = fs::temp_directory_path() / "kdray_no_such_file.obj";
+    CHECK_THROWS_WITH_AS(load_obj(missing),
+                         (missing.string() + ": cannot open: No such file or directory").c_str(),
+                         Error);
+    TempDir dir;
+    const fs::path folder = dir.write("x.obj", "").parent_path();
+    CHECK_THROWS_WITH_AS(load_obj(folder),
+                         (folder.string() + ": cannot open: Is a directory").c_str(), Error);
+}
+
+TEST_CASE("the generated test scenes in testdata/ load") {
+    const fs::path root = test::source_dir() / "testdata";
+    const Scene room = load_obj(root / "cornell" / "room.obj");
+    CHECK(room.triangle_count() == 2130);
+    CHECK(room.warnings.empty());
+    bool mirror = false, glass = false, light = false;
+    for (const Material& m : room.materials) {
+        mirror |= m.illum == 3 && m.reflects();
+        glass |= m.illum == 7 && m.transmits() && m.ior == 1.5f;
+        light |= m.emits();
+    }
+    CHECK(mirror);
+    CHECK(glass);
+    CHECK(light);
+    for (int k = 0; k < 12; ++k) {
+        char name[32];
+        std::snprintf(name, sizeof name, "frame_%03d.obj", k);
+        CHECK(load_obj(root / "anim" / name).triangle_count() == 2304);
+    }
+}
+
+TEST_CASE("the shared scenes load with SOURCES.md's triangle counts") {
+    const fs::path scenes = test::shared_dir() / "scenes";
+    if (!fs::exists(scenes)) {
+        MESSAGE("skipped: " << scenes.string() << " is absent");
+        return;
+    }
+    struct Expected {
+        std::string file;
+        std::size_t triangles;
+    };
+    std::vector<Expected> expected = {{"cornell-box/CornellBox-Original.obj", 36},
+                                      {"cornell-box/CornellBox-Sphere.obj", 2188},
+                                      {"cornell-box/CornellBox-Water.obj", 7088},
+                                      {"teapot/teapot.obj", 6320},
+                                      {"bunny/bunny.obj", 69451},
+                                      {"dragon/dragon_res2.obj", 202520},
+                                      {"dragon/dragon_res3.obj", 47794},
+                                      {"dragon/dragon_res4.obj", 11102},
+                                      {"sponza-dabrovic/sponza.obj", 66450}};
+    for (int k = 0; k < 10; ++k)
+        expected.push_back({"horse-poses/frame_00" + std::to_string(k) + ".obj", 16843});
+    for (int k = 0; k < 8; ++k) {
+        expected.push_back({"bart-kitchen/frame_00" + std::to_string(k) + ".obj", 110561});
+        expected.push_back({"bart-robots/frame_00" + std::to_string(k) + ".obj", 71708});
+    }
+    for (const Expected& e : expected) {
+        CAPTURE(e.file);
+        const Scene scene = load_obj(scenes / e.file);
+        CHECK(scene.triangle_count() == e.triangles);
+        CHECK(scene.material_ids.size() == e.triangles);
+    }
+
+    // CornellBox-Original: only relative indices, tabs, usemtl after the faces it names; every
+    // face has a material, the light emits Ke 17 12 4.
+    const Scene cornell = load_obj(scenes / "cornell-box/CornellBox-Original.obj");
+    CHECK(cornell.materials.size() == 8);
+    bool light = false;
+    for (const Material& m : cornell.materials)
+        light |= m.name == "light" && m.emission == Vec3{17, 12, 4};
+    CHECK(light);
+    CHECK(cornell.bounds().lo.x == -1.02f);
+    CHECK(cornell.bounds().hi.y == 1.99f);
+
+    // Sponza's MTL sets both d 1 and Tr 0: d wins, every material is opaque.
+    const Scene sponza = load_obj(scenes / "sponza-dabrovic/sponza.obj");
+    CHECK(sponza.materials.size() == 20);
+    for (const Material& m : sponza.materials) CHECK(m.dissolve == 1.0f);
+    REQUIRE(sponza.warnings.size() == 1);
+    CHECK(sponza.warnings[0].find("20 material(s) set both d and Tr") != std::string::npos);
+}
