@@ -1,0 +1,280 @@
+// render_file.cpp — reading and checking the render file of conventions.md.
+//
+// Every field is optional and a JSON null counts as absent (exporters write `"background": null`
+// for "no opinion"; BART's robots scene does). Anything else that is not exactly what the format
+// says is an Error naming the file and the field's path, e.g. `camera[2].fov_y`, so that a typo
+// never silently falls back to a default.
+#include "core/render_file.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <sstream>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+#include "core/error.h"
+
+namespace kdray {
+namespace {
+
+using nlohmann::json;
+
+/// Sane upper bounds: larger values are typos, and would ask for absurd amounts of memory.
+constexpr long long kMaxImageSize = 65536;
+constexpr long long kMaxSpp = 65536;
+constexpr long long kMaxDepth = 1024;
+
+class RenderFileParser {
+  public:
+    explicit RenderFileParser(std::string file) : file_(std::move(file)) {}
+
+    RenderSettings parse(const std::string& text) {
+        json root;
+        try {
+            root = json::parse(text);
+        } catch (const json::parse_error& e) {
+            // nlohmann's message begins with "[json.exception.parse_error.101] "; drop the tag.
+            std::string what = e.what();
+            if (const auto pos = what.find("] "); what.starts_with("[json") && pos != what.npos)
+                what = what.substr(pos + 2);
+            throw Error(file_ + ": invalid JSON at byte " + std::to_string(e.byte) + ": " + what);
+        } catch (const json::exception& e) {
+            // Not a syntax error but a value JSON cannot hold here, e.g. a number overflow.
+            throw Error(file_ + ": invalid JSON: " + e.what());
+        }
+        if (!root.is_object()) throw Error(file_ + ": the render file must be a JSON object");
+
+        RenderSettings settings;
+        check_fields(root, "", {"image", "camera", "lights", "background", "max_depth"});
+        if (present(root, "image")) read_image(root["image"], settings);
+        if (present(root, "camera")) {
+            read_camera(root["camera"], settings);
+            settings.camera_given = true;
+        }
+        if (present(root, "lights")) read_lights(root["lights"], settings);
+        if (present(root, "background")) {
+            settings.background = vec3(root["background"], "background");
+            if (settings.background.x < 0 || settings.background.y < 0 || settings.background.z < 0)
+                fail("background", "must not be negative");
+        }
+        if (present(root, "max_depth"))
+            settings.max_depth = integer(root["max_depth"], "max_depth", 1, kMaxDepth);
+        return settings;
+    }
+
+  private:
+    [[noreturn]] void fail(const std::string& path, const std::string& what) const {
+        throw Error(file_ + ": field '" + path + "' " + what);
+    }
+
+    static bool present(const json& object, const char* key) {
+        const auto it = object.find(key);
+        return it != object.end() && !it->is_null();
+    }
+
+    static std::string join(const std::string& parent, std::string_view key) {
+        return parent.empty() ? std::string(key) : parent + "." + std::string(key);
+    }
+
+    /// Every key of `object` must be one of `allowed`.
+    void check_fields(const json& object, const std::string& path,
+                      std::initializer_list<std::string_view> allowed) const {
+        for (const auto& item : object.items()) {
+            if (std::find(allowed.begin(), allowed.end(), item.key()) == allowed.end())
+                throw Error(file_ + ": unknown field '" + join(path, item.key()) + "'");
+        }
+    }
+
+    void require_object(const json& value, const std::string& path) const {
+        if (!value.is_object()) fail(path, "must be an object");
+    }
+
+    float number(const json& value, const std::string& path) const {
+        if (!value.is_number()) fail(path, "must be a number");
+        const double d = value.get<double>();
+        if (!std::isfinite(d) || std::fabs(d) > std::numeric_limits<float>::max())
+            fail(path, "must be a finite number");
+        return static_cast<float>(d);
+    }
+
+    int integer(const json& value, const std::string& path, long long lo, long long hi) const {
+        if (!value.is_number_integer()) fail(path, "must be an integer");
+        // Unsigned values above int64's range read as huge; compare as signed when they fit.
+        const bool too_big =
+            value.is_number_unsigned() &&
+            value.get<unsigned long long>() >
+                static_cast<unsigned long long>(std::numeric_limits<long long>::max());
+        const long long v =
+            too_big ? std::numeric_limits<long long>::max() : value.get<long long>();
+        if (v < lo || v > hi)
+            fail(path, "must be between " + std::to_string(lo) + " and " + std::to_string(hi) +
+                           " (is " + value.dump() + ")");
+        return static_cast<int>(v);
+    }
+
+    Vec3 vec3(const json& value, const std::string& path) const {
+        if (!value.is_array() || value.size() != 3) fail(path, "must be an array of 3 numbers");
+        return {number(value[0], path + "[0]"), number(value[1], path + "[1]"),
+                number(value[2], path + "[2]")};
+    }
+
+    void read_image(const json& image, RenderSettings& settings) const {
+        require_object(image, "image");
+        check_fields(image, "image", {"width", "height", "spp"});
+        if (present(image, "width"))
+            settings.width = integer(image["width"], "image.width", 1, kMaxImageSize);
+        if (present(image, "height"))
+            settings.height = integer(image["height"], "image.height", 1, kMaxImageSize);
+        if (present(image, "spp")) settings.spp = integer(image["spp"], "image.spp", 1, kMaxSpp);
+    }
+
+    Camera read_camera_fields(const json& c, const std::string& path) const {
+        Camera camera;
+        if (present(c, "position")) camera.position = vec3(c["position"], join(path, "position"));
+        if (present(c, "look_at")) camera.look_at = vec3(c["look_at"], join(path, "look_at"));
+        if (present(c, "up")) camera.up = vec3(c["up"], join(path, "up"));
+        if (present(c, "fov_y")) {
+            camera.fov_y = number(c["fov_y"], join(path, "fov_y"));
+            if (!(camera.fov_y > 0.0f && camera.fov_y < 180.0f))
+                fail(join(path, "fov_y"), "must be between 0 and 180 degrees, exclusive");
+        }
+        // The basis of conventions.md's camera model must exist: a view direction and an up
+        // vector that is not along it.
+        const Vec3 view = camera.look_at - camera.position;
+        if (view == Vec3{0, 0, 0})
+            fail(join(path, "look_at"), "must differ from the camera position");
+        if (length(camera.up) == 0.0f) fail(join(path, "up"), "must not be the zero vector");
+        if (length(cross(normalize(view), normalize(camera.up))) < 1e-6f)
+            fail(join(path, "up"), "is parallel to the view direction (look_at - position)");
+        return camera;
+    }
+
+    void read_camera(const json& value, RenderSettings& settings) const {
+        settings.camera_keys.clear();
+        if (value.is_object()) {
+            check_fields(value, "camera", {"position", "look_at", "up", "fov_y"});
+            settings.camera_keys.push_back({0, read_camera_fields(value, "camera")});
+            return;
+        }
+        if (!value.is_array()) fail("camera", "must be an object or an array of keyframes");
+        if (value.empty()) fail("camera", "must have at least one keyframe");
+        std::vector<std::size_t> source;  // each key's index in the file, for messages
+        for (std::size_t i = 0; i < value.size(); ++i) {
+            const std::string path = "camera[" + std::to_string(i) + "]";
+            const json& key = value[i];
+            require_object(key, path);
+            check_fields(key, path, {"frame", "position", "look_at", "up", "fov_y"});
+            if (!present(key, "frame"))
+                fail(path + ".frame", "is missing: every camera keyframe needs an integer frame");
+            const int frame =
+                integer(key["frame"], path + ".frame", 0, std::numeric_limits<int>::max());
+            settings.camera_keys.push_back({frame, read_camera_fields(key, path)});
+            source.push_back(i);
+        }
+        // Sort by frame, keeping the file's indices alongside to name duplicates.
+        std::vector<std::size_t> order(source.size());
+        for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+        std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+            return settings.camera_keys[a].frame < settings.camera_keys[b].frame;
+        });
+        std::vector<CameraKey> sorted;
+        for (std::size_t k = 0; k < order.size(); ++k) {
+            const CameraKey& key = settings.camera_keys[order[k]];
+            if (k > 0 && sorted.back().frame == key.frame)
+                fail("camera[" + std::to_string(source[order[k]]) + "].frame",
+                     "repeats frame " + std::to_string(key.frame) + " of camera[" +
+                         std::to_string(source[order[k - 1]]) + "]");
+            sorted.push_back(key);
+        }
+        settings.camera_keys = std::move(sorted);
+    }
+
+    void read_lights(const json& value, RenderSettings& settings) const {
+        if (!value.is_array()) fail("lights", "must be an array");
+        for (std::size_t i = 0; i < value.size(); ++i) {
+            const std::string path = "lights[" + std::to_string(i) + "]";
+            const json& l = value[i];
+            require_object(l, path);
+            Light light;
+            if (present(l, "type")) {
+                if (!l["type"].is_string()) fail(path + ".type", "must be a string");
+                const std::string type = l["type"].get<std::string>();
+                if (type == "point")
+                    light.type = Light::Type::point;
+                else if (type == "directional")
+                    light.type = Light::Type::directional;
+                else
+                    fail(path + ".type",
+                         "must be \"point\" or \"directional\" (is \"" + type + "\")");
+            }
+            if (light.type == Light::Type::point) {
+                check_fields(l, path, {"type", "position", "intensity"});
+                if (present(l, "position"))
+                    light.position = vec3(l["position"], path + ".position");
+                if (present(l, "intensity"))
+                    light.intensity = vec3(l["intensity"], path + ".intensity");
+            } else {
+                check_fields(l, path, {"type", "direction", "irradiance"});
+                if (present(l, "direction"))
+                    light.direction = vec3(l["direction"], path + ".direction");
+                if (length(light.direction) == 0.0f)
+                    fail(path + ".direction", "must not be the zero vector");
+                if (present(l, "irradiance"))
+                    light.intensity = vec3(l["irradiance"], path + ".irradiance");
+            }
+            if (light.intensity.x < 0 || light.intensity.y < 0 || light.intensity.z < 0)
+                fail(path + (light.type == Light::Type::point ? ".intensity" : ".irradiance"),
+                     "must not be negative");
+            settings.lights.push_back(light);
+        }
+    }
+
+    std::string file_;
+};
+
+}  // namespace
+
+Camera RenderSettings::camera_at(int frame) const {
+    if (camera_keys.empty()) return Camera{};
+    // Before the first key and after the last, the nearest key holds.
+    if (frame <= camera_keys.front().frame) return camera_keys.front().camera;
+    if (frame >= camera_keys.back().frame) return camera_keys.back().camera;
+    // The first key after `frame`; the one before it is at or before `frame`.
+    const auto next = std::upper_bound(camera_keys.begin(), camera_keys.end(), frame,
+                                       [](int f, const CameraKey& key) { return f < key.frame; });
+    const CameraKey& b = *next;
+    const CameraKey& a = *(next - 1);
+    const float t = static_cast<float>(frame - a.frame) / static_cast<float>(b.frame - a.frame);
+    Camera c;
+    c.position = lerp(a.camera.position, b.camera.position, t);
+    c.look_at = lerp(a.camera.look_at, b.camera.look_at, t);
+    c.up = lerp(a.camera.up, b.camera.up, t);
+    c.fov_y = a.camera.fov_y + (b.camera.fov_y - a.camera.fov_y) * t;
+    return c;
+}
+
+RenderSettings parse_render_json(const std::string& text, const std::filesystem::path& name) {
+    RenderSettings settings = RenderFileParser(name.string()).parse(text);
+    settings.path = name;
+    return settings;
+}
+
+RenderSettings load_render_file(const std::filesystem::path& path) {
+    // A directory opens as a stream on Linux and only fails on reading; say so plainly.
+    if (std::error_code ec; std::filesystem::is_directory(path, ec))
+        throw Error(path.string() + ": cannot open: " + std::strerror(EISDIR));
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(path.string() + ": cannot open: " + std::strerror(errno));
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (in.bad()) throw Error(path.string() + ": cannot read: " + std::strerror(errno));
+    return parse_render_json(text.str(), path);
+}
+
+}  // namespace kdray
