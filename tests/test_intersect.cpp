@@ -1,0 +1,329 @@
+// test_intersect.cpp — the shared ray–triangle test of core/kd_traverse.h (Woop, Benthin, Wald
+// 2013, "Watertight Ray/Triangle Intersection", JCGT 2(1)): rays aimed exactly at the edges and
+// vertices of closed meshes never slip through, degenerate triangles are never hit, and distances
+// and barycentrics match closed forms on a known triangle.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/kd_traverse.h"
+#include "core/math.h"
+
+namespace kdray {
+namespace {
+
+KdRay make_ray(Vec3 org, Vec3 dir, float tmin = 0.0f, float tmax = INFINITY) {
+    KdRay r;
+    r.org[0] = org.x, r.org[1] = org.y, r.org[2] = org.z;
+    r.dir[0] = dir.x, r.dir[1] = dir.y, r.dir[2] = dir.z;
+    r.tmin = tmin;
+    r.tmax = tmax;
+    return r;
+}
+
+KdHit no_hit(float tmax = INFINITY) {
+    return KdHit{tmax, KDRAY_NO_HIT, 0.0f, 0.0f};
+}
+
+/// One triangle against one ray, with [tmin, tmax) taken from the ray as the tracer does.
+KdHit intersect(const std::vector<float>& tri, const KdRay& ray) {
+    KdRayPrecomp p = kd_ray_precompute(ray);
+    KdHit hit = no_hit(ray.tmax);
+    kd_intersect_triangle(&p, tri.data(), 0, ray.tmin, &hit);
+    return hit;
+}
+
+/// A triangle mesh as a soup plus, for each target point a test aims at, the triangles that
+/// share it (the only ones a ray through it may hit first).
+struct Mesh {
+    std::vector<float> triangles;
+    void add(Vec3 a, Vec3 b, Vec3 c) {
+        for (Vec3 v : {a, b, c}) triangles.insert(triangles.end(), {v.x, v.y, v.z});
+    }
+    std::size_t count() const { return triangles.size() / KDRAY_FLOATS_PER_TRIANGLE; }
+};
+
+struct Target {
+    Vec3 point;
+    std::vector<kd_u32> sharing;  // triangles incident to the vertex or edge
+};
+
+/// Every triangle the ray hits, each tested on its own (not just the nearest).
+std::vector<kd_u32> all_hits(const Mesh& mesh, const KdRay& ray) {
+    std::vector<kd_u32> ids;
+    KdRayPrecomp p = kd_ray_precompute(ray);
+    for (std::size_t i = 0; i < mesh.count(); ++i) {
+        KdHit hit = no_hit(ray.tmax);
+        if (kd_intersect_triangle(&p, &mesh.triangles[i * KDRAY_FLOATS_PER_TRIANGLE], kd_u32(i),
+                                  ray.tmin, &hit))
+            ids.push_back(kd_u32(i));
+    }
+    return ids;
+}
+
+/// An n x n grid of quads spanned by e1, e2 from `origin`, each quad cut along its diagonal into
+/// two triangles. Vertices are computed once, so neighbouring triangles share bit-identical
+/// corners as a loaded mesh does. Targets: every interior vertex (6 triangles) and the midpoint
+/// of every interior edge (2 triangles).
+void make_grid(int n, Vec3 origin, Vec3 e1, Vec3 e2, Mesh& mesh, std::vector<Target>& targets) {
+    std::vector<Vec3> v((n + 1) * (n + 1));
+    auto at = [&](int i, int j) -> Vec3& { return v[j * (n + 1) + i]; };
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) at(i, j) = origin + e1 * float(i) + e2 * float(j);
+    // Triangles of quad (i, j): 2 (j n + i) is (i,j)-(i+1,j)-(i+1,j+1), the next one
+    // (i,j)-(i+1,j+1)-(i,j+1).
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            mesh.add(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+            mesh.add(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+        }
+    auto lower = [&](int i, int j) { return kd_u32(2 * (j * n + i)); };
+    auto upper = [&](int i, int j) { return kd_u32(2 * (j * n + i) + 1); };
+    auto mid = [](Vec3 a, Vec3 b) { return (a + b) * 0.5f; };
+    for (int j = 1; j < n; ++j)
+        for (int i = 1; i < n; ++i)
+            targets.push_back({at(i, j),
+                               {lower(i - 1, j - 1), upper(i - 1, j - 1), lower(i, j), upper(i, j),
+                                lower(i - 1, j), upper(i, j - 1)}});
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            // Diagonal of quad (i, j).
+            targets.push_back({mid(at(i, j), at(i + 1, j + 1)), {lower(i, j), upper(i, j)}});
+            // Horizontal edge above the quad, vertical edge right of it, when interior.
+            if (j + 1 < n)
+                targets.push_back(
+                    {mid(at(i, j + 1), at(i + 1, j + 1)), {upper(i, j), lower(i, j + 1)}});
+            if (i + 1 < n)
+                targets.push_back(
+                    {mid(at(i + 1, j), at(i + 1, j + 1)), {lower(i, j), upper(i + 1, j)}});
+        }
+}
+
+/// Aims `rays_per_target` rays from random origins on both sides of the mesh at every target and
+/// checks that each hits at least one triangle, that its nearest hit is one sharing the target,
+/// and that it lies at the target (t = 1, since the direction is target - origin). Returns the
+/// number of rays shot.
+int sweep(const Mesh& mesh, const std::vector<Target>& targets, Vec3 normal, float distance,
+          int rays_per_target, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> side(-1.0f, 1.0f);
+    int shot = 0, reported = 0;
+    for (const Target& target : targets)
+        for (int k = 0; k < rays_per_target; ++k) {
+            // Origins above and below, every fifth one grazing (height 0.05 of the distance).
+            Vec3 offset{side(rng), side(rng), side(rng)};
+            offset = offset - normal * dot(offset, normal);
+            const float height = (k % 5 == 0 ? 0.05f : 0.3f + 0.7f * std::fabs(side(rng)));
+            offset = offset + normal * (k % 2 ? height : -height);
+            const Vec3 org = target.point + offset * distance;
+            const KdRay ray = make_ray(org, target.point - org);
+            ++shot;
+            const std::vector<kd_u32> hits = all_hits(mesh, ray);
+            KdRayPrecomp p = kd_ray_precompute(ray);
+            KdHit best = no_hit();
+            for (std::size_t i = 0; i < mesh.count(); ++i)
+                kd_intersect_triangle(&p, &mesh.triangles[i * KDRAY_FLOATS_PER_TRIANGLE], kd_u32(i),
+                                      0.0f, &best);
+            bool shared = false;
+            for (kd_u32 id : target.sharing) shared = shared || id == best.prim;
+            const bool ok = !hits.empty() && shared && std::fabs(best.t - 1.0f) < 1e-2f;
+            if (!ok && reported++ < 5) {
+                INFO("target (", target.point.x, ", ", target.point.y, ", ", target.point.z,
+                     ") from (", org.x, ", ", org.y, ", ", org.z, "): ", hits.size(),
+                     " triangles hit, nearest ", best.prim, " at t = ", best.t);
+                CHECK(ok);
+            }
+        }
+    CHECK(reported == 0);
+    return shot;
+}
+
+}  // namespace
+
+TEST_CASE("rays through shared edges and vertices of a grid never slip through") {
+    struct Case {
+        std::string name;
+        Vec3 origin, e1, e2;
+        float distance;
+    };
+    // Axis-aligned unit grid; a rotated, non-uniform one whose vertices are inexact in float; and
+    // both far from the origin (1e5), where a float's spacing is 1/128 and the translation to the
+    // ray origin is where precision is lost.
+    const Vec3 r1 = normalize(Vec3{0.8f, 0.3f, -0.52f}), r2 = normalize(cross(r1, {0.1f, 1, 0.2f}));
+    const std::vector<Case> cases = {
+        {"axis-aligned", {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 3.0f},
+        {"rotated", {0.3f, -0.7f, 0.1f}, r1 * 0.37f, r2 * 0.61f, 2.0f},
+        {"sheared", {-1, 2, 0.5f}, Vec3{0.9f, 0.1f, 0.33f}, Vec3{-0.2f, 0.7f, 0.45f}, 2.0f},
+        {"axis-aligned at 1e5", {1e5f, 1e5f, 1e5f}, {1, 0, 0}, {0, 1, 0}, 5.0f},
+        {"rotated at 1e5", {1e5f, -1e5f, 1e5f}, r1 * 3.0f, r2 * 2.0f, 20.0f},
+    };
+    int total = 0;
+    for (const Case& c : cases) {
+        CAPTURE(c.name);
+        Mesh mesh;
+        std::vector<Target> targets;
+        make_grid(8, c.origin, c.e1, c.e2, mesh, targets);
+        total += sweep(mesh, targets, normalize(cross(c.e1, c.e2)), c.distance, 40, 7);
+    }
+    CHECK(total > 10000);
+}
+
+TEST_CASE("rays straight down onto exact grid vertices and edges hit") {
+    // Axis-aligned rays through exactly representable vertices and edge points: the sheared edge
+    // functions are exactly zero, the case the double-precision fallback exists for.
+    Mesh mesh;
+    std::vector<Target> targets;
+    make_grid(6, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, mesh, targets);
+    int misses = 0;
+    for (const Target& target : targets)
+        for (float dz : {-1.0f, 1.0f}) {
+            const KdRay ray = make_ray(target.point - Vec3{0, 0, dz * 2.0f}, {0, 0, dz});
+            const std::vector<kd_u32> hits = all_hits(mesh, ray);
+            if (hits.empty()) ++misses;
+            for (kd_u32 id : hits) {
+                bool shared = false;
+                for (kd_u32 s : target.sharing) shared = shared || s == id;
+                CHECK(shared);
+            }
+        }
+    CHECK(misses == 0);
+}
+
+TEST_CASE("rays through the centre of an irregular fan hit one of its triangles") {
+    // A fan of 13 triangles around a centre vertex, rim at random heights: every ray through the
+    // centre crosses a vertex shared by all of them.
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    const Vec3 centre{0.123f, -0.456f, 0.789f};
+    const int n = 13;
+    std::vector<Vec3> rim;
+    for (int i = 0; i < n; ++i) {
+        const float a = 2.0f * 3.14159265f * (float(i) + 0.3f * unit(rng)) / float(n);
+        rim.push_back(centre + Vec3{std::cos(a), std::sin(a), 0.3f * unit(rng)});
+    }
+    Mesh mesh;
+    for (int i = 0; i < n; ++i) mesh.add(centre, rim[i], rim[(i + 1) % n]);
+    int misses = 0;
+    for (int k = 0; k < 5000; ++k) {
+        Vec3 org = centre + Vec3{unit(rng), unit(rng), unit(rng)} * 3.0f;
+        if (std::fabs(org.z - centre.z) < 0.5f) org.z += 1.0f;
+        const KdRay ray = make_ray(org, centre - org);
+        if (all_hits(mesh, ray).empty()) ++misses;
+    }
+    CHECK(misses == 0);
+}
+
+namespace {
+
+/// Rays from random origins at points of the degenerate triangle `tri` (its first corner, the
+/// middle and random points between its first and last corners); returns how many hit it.
+int hits_on_degenerate(const std::vector<float>& tri, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    const Vec3 a{tri[0], tri[1], tri[2]}, c{tri[6], tri[7], tri[8]};
+    int hits = 0;
+    for (int k = 0; k < 2000; ++k) {
+        const float s = k % 3 == 0 ? 0.0f : k % 3 == 1 ? 0.5f : 0.5f + 0.5f * unit(rng);
+        const Vec3 target = a + (c - a) * s;
+        const Vec3 org = target + Vec3{unit(rng), unit(rng), unit(rng)} * 4.0f;
+        if (intersect(tri, make_ray(org, target - org)).prim != KDRAY_NO_HIT) ++hits;
+    }
+    return hits;
+}
+
+}  // namespace
+
+TEST_CASE("triangles with coincident corners are never hit") {
+    // Two equal corners make one edge function exactly zero and the other two exact negatives
+    // of each other, so the sign test or det == 0 rejects every ray.
+    const Vec3 p{0.25f, 0.5f, 0.0f}, q{1.0f, 2.0f, 3.0f};
+    CHECK(hits_on_degenerate({p.x, p.y, p.z, p.x, p.y, p.z, p.x, p.y, p.z}, 5) == 0);
+    CHECK(hits_on_degenerate({p.x, p.y, p.z, p.x, p.y, p.z, q.x, q.y, q.z}, 6) == 0);
+    CHECK(hits_on_degenerate({q.x, q.y, q.z, p.x, p.y, p.z, p.x, p.y, p.z}, 7) == 0);
+}
+
+// Known failure of kd_intersect_triangle, reported to the owner of core/kd_traverse.h: three
+// distinct collinear corners have zero area (make_scene counts them as such, and kd_traverse.h
+// promises they are never hit), but after the translation and shear into ray space the rounded
+// corners are no longer collinear, det is a tiny non-zero number and rays aimed at the segment
+// hit with meaningless barycentrics. E.g. triangle (0,0,0) (1,0,0) (2,0,0), ray origin
+// (0.3, 0.82, 1.14), direction (1.4, -0.82, -1.14): hit at t = 1, u = 0.189, v = 0.755.
+// may_fail keeps the suite green while the contract is decided; the test passes once it holds.
+TEST_CASE("collinear zero-area triangles are never hit" * doctest::may_fail()) {
+    CHECK(hits_on_degenerate({0, 0, 0, 1, 0, 0, 2, 0, 0}, 8) == 0);   // along an axis
+    CHECK(hits_on_degenerate({0, 0, 0, 1, 1, 1, 2, 2, 2}, 9) == 0);   // along a diagonal
+    CHECK(hits_on_degenerate({0, 0, 0, 2, 2, 2, 1, 1, 1}, 10) == 0);  // middle corner last
+}
+
+TEST_CASE("closed-form distance and barycentrics on a known triangle") {
+    const std::vector<float> tri = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    SUBCASE("straight down") {
+        KdHit h = intersect(tri, make_ray({0.25f, 0.5f, 2.0f}, {0, 0, -1}));
+        CHECK(h.prim == 0);
+        CHECK(h.t == doctest::Approx(2.0f).epsilon(1e-6));
+        CHECK(h.u == doctest::Approx(0.25f).epsilon(1e-6));  // weight of vertex 1
+        CHECK(h.v == doctest::Approx(0.5f).epsilon(1e-6));   // weight of vertex 2
+    }
+    SUBCASE("a direction that is not unit length scales t") {
+        KdHit h = intersect(tri, make_ray({0.25f, 0.5f, 2.0f}, {0, 0, -4}));
+        CHECK(h.t == doctest::Approx(0.5f).epsilon(1e-6));
+    }
+    SUBCASE("oblique, dominant axis x") {
+        // Hit point (0.1, 0.2, 0); origin = hit + 2 * (3, 0.5, 0.25), direction the reverse.
+        const Vec3 hit{0.1f, 0.2f, 0.0f}, back{3.0f, 0.5f, 0.25f};
+        KdHit h = intersect(tri, make_ray(hit + back * 2.0f, -back));
+        CHECK(h.prim == 0);
+        CHECK(h.t == doctest::Approx(2.0f).epsilon(1e-5));
+        CHECK(h.u == doctest::Approx(0.1f).epsilon(1e-5));
+        CHECK(h.v == doctest::Approx(0.2f).epsilon(1e-5));
+    }
+    SUBCASE("back faces are hit: no culling") {
+        KdHit h = intersect(tri, make_ray({0.25f, 0.5f, -2.0f}, {0, 0, 1}));
+        CHECK(h.prim == 0);
+        CHECK(h.t == doctest::Approx(2.0f).epsilon(1e-6));
+        CHECK(h.u == doctest::Approx(0.25f).epsilon(1e-6));
+        CHECK(h.v == doctest::Approx(0.5f).epsilon(1e-6));
+    }
+    SUBCASE("outside the triangle misses") {
+        CHECK(intersect(tri, make_ray({0.6f, 0.6f, 2.0f}, {0, 0, -1})).prim == KDRAY_NO_HIT);
+        CHECK(intersect(tri, make_ray({-0.01f, 0.5f, 2.0f}, {0, 0, -1})).prim == KDRAY_NO_HIT);
+    }
+}
+
+TEST_CASE("the hit must lie in [tmin, best)") {
+    const std::vector<float> tri = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const Vec3 org{0.25f, 0.25f, 2.0f}, dir{0, 0, -1};  // hits at exactly t = 2
+    CHECK(intersect(tri, make_ray(org, dir, 0.0f, INFINITY)).prim == 0);
+    CHECK(intersect(tri, make_ray(org, dir, 2.0f, INFINITY)).prim == 0);  // tmin is inclusive
+    CHECK(intersect(tri, make_ray(org, dir, std::nextafter(2.0f, 3.0f), INFINITY)).prim ==
+          KDRAY_NO_HIT);
+    CHECK(intersect(tri, make_ray(org, dir, 0.0f, 2.0f)).prim == KDRAY_NO_HIT);  // best exclusive
+    CHECK(intersect(tri, make_ray(org, dir, 0.0f, std::nextafter(2.0f, 3.0f))).prim == 0);
+    // Behind the origin.
+    CHECK(intersect(tri, make_ray(org, -dir)).prim == KDRAY_NO_HIT);
+
+    // A nearer hit already found is kept.
+    KdRayPrecomp p = kd_ray_precompute(make_ray(org, dir));
+    KdHit best{1.5f, 42, 0.0f, 0.0f};
+    CHECK(kd_intersect_triangle(&p, tri.data(), 0, 0.0f, &best) == 0);
+    CHECK(best.prim == 42);
+    CHECK(best.t == 1.5f);
+}
+
+TEST_CASE("rays parallel to the triangle's plane miss") {
+    const std::vector<float> tri = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    // In the plane, crossing the triangle's interior and running along its edges.
+    CHECK(intersect(tri, make_ray({-1, 0.25f, 0}, {1, 0, 0})).prim == KDRAY_NO_HIT);
+    CHECK(intersect(tri, make_ray({0.2f, -1, 0}, {0, 1, 0})).prim == KDRAY_NO_HIT);
+    CHECK(intersect(tri, make_ray({-1, 0, 0}, {1, 0, 0})).prim == KDRAY_NO_HIT);
+    CHECK(intersect(tri, make_ray({-1, 2, 0}, {1, -1, 0})).prim == KDRAY_NO_HIT);
+    // Above the plane.
+    CHECK(intersect(tri, make_ray({-1, 0.25f, 1}, {1, 0, 0})).prim == KDRAY_NO_HIT);
+    CHECK(intersect(tri, make_ray({-1, -1, 0.5f}, {1, 1, 0})).prim == KDRAY_NO_HIT);
+}
+
+}  // namespace kdray
