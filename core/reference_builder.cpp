@@ -6,6 +6,7 @@
 #include "core/reference_builder.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -94,6 +95,8 @@ class ReferenceBuilder {
         events = NodeEvents{};  // the parent's events are no longer needed below this point
         const std::size_t left_count = count_triangles(left[0]);
         const std::size_t right_count = count_triangles(right[0]);
+        // The classification must agree with the counts the sweep priced the split with.
+        assert(left_count == split.left_count && right_count == split.right_count);
 
         // Emit the inner node, then its children in preorder.
         const std::size_t index = nodes_.size();
