@@ -3,12 +3,14 @@
 // The arithmetic mirrors /work/shared/peers/embree/embree_ref.cpp operation for operation, in
 // float: normalising multiplies by the reciprocal of the length (not a division, as
 // kdray::normalize does), tan takes the half angle as fov_y * 0.5 * pi / 180, and the direction
-// is f + (r * sx + u * sy). Any other order rounds differently, and the centre rays would no
-// longer be bit-identical with the Embree peer's, which the pixel-by-pixel AOV comparison needs.
+// is f + (r * sx + u * sy) (kd_camera_ray, shared with the kernels). Any other order rounds
+// differently, and the centre rays would no longer be bit-identical with the Embree peer's, which
+// the pixel-by-pixel AOV comparison needs.
 #include "core/camera.h"
 
+#include "core/kd_render.h"
+
 #include <cmath>
-#include <limits>
 #include <numbers>
 
 namespace kdray {
@@ -33,21 +35,24 @@ CameraRays::CameraRays(const Camera& camera, int width_, int height_)
     aspect = static_cast<float>(width) / static_cast<float>(height);
 }
 
+KdView CameraRays::view() const {
+    KdView v{};
+    for (int a = 0; a < 3; ++a) {
+        v.origin[a] = origin[a];
+        v.forward[a] = forward[a];
+        v.right[a] = right[a];
+        v.up[a] = up[a];
+    }
+    v.tan_half_fov = tan_half_fov;
+    v.aspect = aspect;
+    v.width = static_cast<kd_u32>(width);
+    v.height = static_cast<kd_u32>(height);
+    return v;
+}
+
 KdRay CameraRays::ray(float px, float py) const {
-    // Screen coordinates in [-t*a, t*a] x [-t, t], y up; pixel row 0 is the top.
-    const float sx = (2.0f * px / static_cast<float>(width) - 1.0f) * tan_half_fov * aspect;
-    const float sy = (1.0f - 2.0f * py / static_cast<float>(height)) * tan_half_fov;
-    const Vec3 d = peer_normalize(forward + (right * sx + up * sy));
-    KdRay ray;
-    ray.org[0] = origin.x;
-    ray.org[1] = origin.y;
-    ray.org[2] = origin.z;
-    ray.tmin = 0.0f;
-    ray.dir[0] = d.x;
-    ray.dir[1] = d.y;
-    ray.dir[2] = d.z;
-    ray.tmax = std::numeric_limits<float>::infinity();
-    return ray;
+    const KdView v = view();
+    return kd_camera_ray(&v, px, py);
 }
 
 Camera frame_bounds(const Aabb& bounds, float fov_y) {

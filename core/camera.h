@@ -16,8 +16,12 @@ struct CameraRays {
 
     CameraRays(const Camera& camera, int width, int height);
     /// The ray through image position (px, py) in pixels, (x + 0.5, y + 0.5) being pixel (x, y)'s
-    /// centre; the direction is unit length, tmin 0, tmax +inf.
+    /// centre; the direction is unit length, tmin 0, tmax +inf. It is kd_camera_ray of
+    /// core/kd_render.h, the code the render kernel runs too.
     KdRay ray(float px, float py) const;
+    /// The camera part of the shared KdView (origin, basis, tan_half_fov, aspect, size); the
+    /// render settings' fields are left zero.
+    KdView view() const;
 };
 
 /// A camera that looks at a scene's bounds from the front (+z), used when no render file gives one.

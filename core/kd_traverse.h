@@ -68,7 +68,10 @@ KDRAY_INLINE KdRayPrecomp kd_ray_precompute(KdRay ray) {
 
 /* Tests triangle `id` (9 floats at tri) and, when it is hit at t in [tmin, best->t), makes it the
  * best hit. Watertight: a ray through a shared edge or vertex hits at least one of the triangles
- * that share it, and zero-area triangles are never hit. Returns 1 on a new best hit. */
+ * that share it. A triangle with two equal corners is never hit; three distinct collinear corners
+ * stop being collinear after rounding into ray space, which is why scenes collapse zero-area
+ * triangles to a point when they are loaded (collapse_zero_area_triangles). Returns 1 on a new
+ * best hit. */
 KDRAY_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL const kd_f32* tri,
                                        kd_u32 id, kd_f32 tmin, KdHit* best) {
     /* Vertices relative to the ray origin, then sheared and scaled into ray space. */
@@ -114,12 +117,17 @@ KDRAY_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL const
     return 1;
 }
 
-/* Clips the ray's [*t0, *t1] to the box {lo, hi}. Returns 0 when they do not overlap. A ray lying
- * in a box face with zero direction on that axis gives NaN slab distances; fmin/fmax ignore them,
- * so the ray counts as inside, as it must for flat boxes. */
+/* Clips the ray's [*t0, *t1] to the box {lo, hi}. Returns 0 when they do not overlap. A ray
+ * lying in a box face (flat boxes included) counts as inside. */
 KDRAY_INLINE int kd_clip_to_box(const KdRayPrecomp* p, const kd_f32* lo, const kd_f32* hi,
                                 kd_f32* t0, kd_f32* t1) {
     for (int a = 0; a < 3; ++a) {
+        /* Parallel to this slab: inside it (faces included) or never. The slab distances would be
+         * 0 * inf = NaN for an origin lying in a face. */
+        if (p->dir[a] == 0.0f) {
+            if (p->org[a] < lo[a] || p->org[a] > hi[a]) return 0;
+            continue;
+        }
         kd_f32 tn = (lo[a] - p->org[a]) * p->inv_dir[a];
         kd_f32 tf = (hi[a] - p->org[a]) * p->inv_dir[a];
         kd_f32 near_t = KDRAY_FMIN(tn, tf), far_t = KDRAY_FMAX(tn, tf);
@@ -182,7 +190,9 @@ KDRAY_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
                 continue;
             }
             const kd_f32 t_plane = (split - o) * p.inv_dir[axis];
-            const int below_first = (o < split) || (o == split && d <= 0.0f);
+            /* On the plane, the child the ray leaves is visited first over [tmin, 0] (hits at
+             * t = 0 on triangles lying in the plane), then the one it enters over [0, tmax]. */
+            const int below_first = (o < split) || (o == split && d > 0.0f);
             const kd_u32 first = below_first ? below : above;
             const kd_u32 second = below_first ? above : below;
             if (t_plane > tmax || t_plane < 0.0f) {

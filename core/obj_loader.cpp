@@ -182,13 +182,8 @@ Scene load_obj(const std::filesystem::path& path) {
             name + ": tinyobjloader made " + std::to_string(scene.triangle_count()) +
             " triangles from faces that fan-triangulate to " + std::to_string(prescan.triangles));
 
-    // Zero-area triangles are kept (they are never hit) and counted for the statistics.
-    for (std::size_t t = 0; t < scene.triangle_count(); ++t) {
-        const Vec3 a = scene.vertex(t, 0), b = scene.vertex(t, 1), c = scene.vertex(t, 2);
-        if (!is_finite(a) || !is_finite(b) || !is_finite(c))
-            throw Error(name + ": triangle " + std::to_string(t) + " has a non-finite vertex");
-        if (length(cross(b - a, c - a)) == 0.0f) ++scene.zero_area_triangles;
-    }
+    // Zero-area triangles are kept, counted for the statistics and made unhittable.
+    collapse_zero_area_triangles(scene);
     return scene;
 }
 

@@ -1,5 +1,7 @@
 #include "core/render_setup.h"
 
+#include "core/camera.h"
+
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -90,24 +92,8 @@ KdLight to_device_light(const Light& light) {
 
 KdView make_view(const Camera& camera, const RenderSettings& settings, const Scene& scene,
                  const Effects& effects, kd_u32 seed) {
-    // The basis in the peer's order: f = normalize(look_at - position), r = normalize(f x up),
-    // u = r x f, each normalised by multiplying with 1 / length.
-    auto unit = [](Vec3 v) { return v * (1.0f / std::sqrt(dot(v, v))); };
-    Vec3 f = unit(camera.look_at - camera.position);
-    Vec3 r = unit(cross(f, camera.up));
-    Vec3 u = cross(r, f);
-    KdView v{};
-    for (int a = 0; a < 3; ++a) {
-        v.origin[a] = camera.position[a];
-        v.forward[a] = f[a];
-        v.right[a] = r[a];
-        v.up[a] = u[a];
-        v.background[a] = settings.background[a];
-    }
-    v.tan_half_fov = std::tan(camera.fov_y * 0.5f * float(M_PI) / 180.0f);
-    v.aspect = float(settings.width) / float(settings.height);
-    v.width = kd_u32(settings.width);
-    v.height = kd_u32(settings.height);
+    KdView v = CameraRays(camera, settings.width, settings.height).view();
+    for (int a = 0; a < 3; ++a) v.background[a] = settings.background[a];
     v.spp = kd_u32(settings.spp);
     v.max_depth = kd_u32(std::clamp(settings.max_depth, 1, KDRAY_MAX_BOUNCES));
     v.light_count = kd_u32(settings.lights.size());

@@ -48,23 +48,37 @@ Aabb Scene::bounds() const {
     return b;
 }
 
+void collapse_zero_area_triangles(Scene& scene) {
+    scene.zero_area_triangles = 0;
+    for (std::size_t t = 0; t < scene.triangle_count(); ++t) {
+        float* v = &scene.triangles[t * KDRAY_FLOATS_PER_TRIANGLE];
+        for (int i = 0; i < KDRAY_FLOATS_PER_TRIANGLE; ++i)
+            if (!std::isfinite(v[i]))
+                throw Error(scene.path.string() + ": triangle " + std::to_string(t) +
+                            " has a non-finite coordinate");
+        double e1[3], e2[3];
+        for (int a = 0; a < 3; ++a) {
+            e1[a] = double(v[3 + a]) - double(v[a]);
+            e2[a] = double(v[6 + a]) - double(v[a]);
+        }
+        const double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2],
+                     nz = e1[0] * e2[1] - e1[1] * e2[0];
+        if (nx != 0.0 || ny != 0.0 || nz != 0.0) continue;
+        ++scene.zero_area_triangles;
+        for (int i = 3; i < KDRAY_FLOATS_PER_TRIANGLE; ++i) v[i] = v[i % 3];
+    }
+}
+
 Scene make_scene(std::vector<float> triangles, std::string name) {
     if (triangles.size() % KDRAY_FLOATS_PER_TRIANGLE != 0)
         throw Error(name + ": triangle array of " + std::to_string(triangles.size()) +
                     " floats is not a whole number of triangles");
-    for (std::size_t i = 0; i < triangles.size(); ++i)
-        if (!std::isfinite(triangles[i]))
-            throw Error(name + ": triangle " + std::to_string(i / KDRAY_FLOATS_PER_TRIANGLE) +
-                        " has a non-finite coordinate");
     Scene scene;
     scene.path = name;
     scene.triangles = std::move(triangles);
     scene.materials.push_back(Material{.name = "default"});
     scene.material_ids.assign(scene.triangle_count(), 0);
-    for (std::size_t t = 0; t < scene.triangle_count(); ++t) {
-        Vec3 a = scene.vertex(t, 0), b = scene.vertex(t, 1), c = scene.vertex(t, 2);
-        if (length(cross(b - a, c - a)) == 0.0f) ++scene.zero_area_triangles;
-    }
+    collapse_zero_area_triangles(scene);
     return scene;
 }
 

@@ -70,6 +70,13 @@ struct Scene {
     Aabb bounds() const;
 };
 
+/// Counts the zero-area triangles into scene.zero_area_triangles and collapses each to its first
+/// corner. They keep their numbers but can never be hit: three distinct collinear corners would
+/// no longer be collinear after a ray-space transform rounds them. The area test is in double,
+/// where the cross product of float differences is all but exact. Also throws Error naming the
+/// triangle when a coordinate is not finite.
+void collapse_zero_area_triangles(Scene& scene);
+
 /// Loads an OBJ file (and the MTL files it names). Throws Error naming the file, the line where
 /// it can, and the problem: an unreadable file, a non-finite or malformed vertex coordinate, a face
 /// index out of range, an empty scene.

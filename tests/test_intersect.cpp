@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/kd_traverse.h"
+#include "core/scene.h"
 #include "core/math.h"
 
 namespace kdray {
@@ -246,17 +247,18 @@ TEST_CASE("triangles with coincident corners are never hit") {
     CHECK(hits_on_degenerate({q.x, q.y, q.z, p.x, p.y, p.z, p.x, p.y, p.z}, 7) == 0);
 }
 
-// Known failure of kd_intersect_triangle, reported to the owner of core/kd_traverse.h: three
-// distinct collinear corners have zero area (make_scene counts them as such, and kd_traverse.h
-// promises they are never hit), but after the translation and shear into ray space the rounded
-// corners are no longer collinear, det is a tiny non-zero number and rays aimed at the segment
-// hit with meaningless barycentrics. E.g. triangle (0,0,0) (1,0,0) (2,0,0), ray origin
-// (0.3, 0.82, 1.14), direction (1.4, -0.82, -1.14): hit at t = 1, u = 0.189, v = 0.755.
-// may_fail keeps the suite green while the contract is decided; the test passes once it holds.
-TEST_CASE("collinear zero-area triangles are never hit" * doctest::may_fail()) {
-    CHECK(hits_on_degenerate({0, 0, 0, 1, 0, 0, 2, 0, 0}, 8) == 0);   // along an axis
-    CHECK(hits_on_degenerate({0, 0, 0, 1, 1, 1, 2, 2, 2}, 9) == 0);   // along a diagonal
-    CHECK(hits_on_degenerate({0, 0, 0, 2, 2, 2, 1, 1, 1}, 10) == 0);  // middle corner last
+// Three distinct collinear corners stop being collinear once rounded into ray space, so the
+// watertight test alone would hit them with meaningless barycentrics (e.g. (0,0,0) (1,0,0)
+// (2,0,0), ray from (0.3, 0.82, 1.14) along (1.4, -0.82, -1.14)). Scenes therefore collapse
+// zero-area triangles to a point when made or loaded; after that no ray hits them.
+TEST_CASE("collinear zero-area triangles are collapsed and never hit") {
+    for (std::vector<float> tri : {std::vector<float>{0, 0, 0, 1, 0, 0, 2, 0, 0},
+                                   std::vector<float>{0, 0, 0, 1, 1, 1, 2, 2, 2},
+                                   std::vector<float>{0, 0, 0, 2, 2, 2, 1, 1, 1}}) {
+        kdray::Scene scene = kdray::make_scene(tri);
+        CHECK(scene.zero_area_triangles == 1);
+        CHECK(hits_on_degenerate(scene.triangles, 8) == 0);
+    }
 }
 
 TEST_CASE("closed-form distance and barycentrics on a known triangle") {
