@@ -20,6 +20,7 @@ struct BuildCommand {
     std::string scene;
     std::string output;  // tree file, optional
     bool json = false;
+    int repeat = 1;  // > 1: one warm-up build, then this many timed builds, median reported
     BuilderOptions builder;
 };
 

@@ -7,9 +7,6 @@
 
 namespace kdray::cli {
 
-/// True when a comes before b in natural order: digit runs compare by value.
-bool natural_less(const std::string& a, const std::string& b);
-
 /// Expands glob patterns that the shell left alone, checks every file exists, sorts naturally
 /// and drops duplicates. Throws Error naming a missing file or a pattern that matched nothing.
 std::vector<std::string> expand_inputs(const std::vector<std::string>& arguments);

@@ -54,6 +54,11 @@ int main(int argc, char** argv) {
     build_app->add_option("scene", build.scene, "OBJ scene")->required();
     build_app->add_option("-o,--output", build.output, "write the tree to this file");
     build_app->add_flag("--json", build.json, "print one JSON object instead of a table");
+    build_app
+        ->add_option("--repeat", build.repeat,
+                     "benchmark: one warm-up build, then this many timed builds; the median is "
+                     "reported as build_ms and every time as build_ms_samples")
+        ->check(CLI::Range(1, 1000));
     add_builder_options(*build_app, build.builder);
 
     RenderCommand render;
@@ -89,7 +94,10 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        // --help and --version are "errors" that succeed; every other one is a usage error.
+        if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+        std::cerr << "kdray: error: " << e.what() << " (see kdray --help)\n";
+        return 2;
     }
 
     try {

@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "core/frame.h"
 #include "core/image.h"
 #include "core/kd_shared.h"
 #include "core/kd_tree.h"
@@ -18,11 +19,7 @@ std::vector<KdHit> trace_closest(const KdTree& tree, const Scene& scene,
                                  const std::vector<KdRay>& rays, int threads = 0);
 
 /// One frame: the centre-ray hits (the AOV) and the shaded image.
-struct FrameResult {
-    HitBuffer hits;
-    Image image;
-};
-FrameResult render_reference(const KdTree& tree, const Scene& scene,
-                             const RenderSettings& settings, const Camera& camera, int threads = 0);
+FrameResult render_reference(const KdTree& tree, const Scene& scene, const RenderSettings& settings,
+                             const Camera& camera, int threads = 0);
 
 }  // namespace kdray

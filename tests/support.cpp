@@ -1,8 +1,13 @@
 #include "tests/support.h"
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <random>
+#include <sstream>
 
 #include "core/kd_traverse.h"
 #include "core/math.h"
@@ -35,8 +40,8 @@ Scene planar_triangles(int count, std::uint32_t seed) {
     std::vector<float> tris;
     for (int i = 0; i < count; ++i) {
         float x = pos(rng), y = pos(rng);
-        push_triangle(tris, {x + jitter(rng), y + jitter(rng), 0}, {x + jitter(rng), y + jitter(rng), 0},
-                      {x + jitter(rng), y + jitter(rng), 0});
+        push_triangle(tris, {x + jitter(rng), y + jitter(rng), 0},
+                      {x + jitter(rng), y + jitter(rng), 0}, {x + jitter(rng), y + jitter(rng), 0});
     }
     return make_scene(std::move(tris), "planar");
 }
@@ -74,7 +79,7 @@ Scene with_zero_area(int count, std::uint32_t seed) {
     std::vector<float> tris = base.triangles;
     for (int i = 0; i < count / 4; ++i) {
         Vec3 p{pos(rng), pos(rng), pos(rng)}, q{pos(rng), pos(rng), pos(rng)};
-        push_triangle(tris, p, p, p);                    // a point
+        push_triangle(tris, p, p, p);                   // a point
         push_triangle(tris, p, q, p + (q - p) * 0.5f);  // a segment
     }
     return make_scene(std::move(tris), "zero_area");
@@ -159,6 +164,56 @@ std::filesystem::path source_dir() {
     return KDRAY_SOURCE_DIR;
 }
 
-std::filesystem::path shared_dir() { return source_dir() / ".." / "shared"; }
+namespace {
+
+std::string shell_quote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+std::string read_file(const std::filesystem::path& path) {
+    std::ifstream in(path);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+}  // namespace
+
+CommandResult run_kdray(const std::vector<std::string>& args) {
+    std::filesystem::path dir = fresh_temp_dir("run");
+    std::string command = shell_quote(KDRAY_BINARY);
+    for (const std::string& a : args) command += " " + shell_quote(a);
+    command += " >" + shell_quote((dir / "out").string()) + " 2>" +
+               shell_quote((dir / "err").string()) + " </dev/null";
+    CommandResult r;
+    int status = std::system(command.c_str());
+    r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.out = read_file(dir / "out");
+    r.err = read_file(dir / "err");
+    std::filesystem::remove_all(dir);
+    return r;
+}
+
+std::filesystem::path fresh_temp_dir(const std::string& name) {
+    static int counter = 0;
+    std::filesystem::path dir =
+        std::filesystem::temp_directory_path() /
+        ("kdray-test-" + std::to_string(::getpid()) + "-" + name + "-" + std::to_string(counter++));
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+std::filesystem::path write_text_file(const std::filesystem::path& path, const std::string& text) {
+    std::filesystem::create_directories(path.parent_path());
+    std::ofstream(path, std::ios::binary) << text;
+    return path;
+}
+
+std::filesystem::path shared_dir() {
+    return source_dir() / ".." / "shared";
+}
 
 }  // namespace kdray::test

@@ -45,6 +45,20 @@ KdHit brute_force_closest(const Scene& scene, const KdRay& ray);
 /// triangle may differ on a tie.
 bool hits_agree(const KdHit& a, const KdHit& b);
 
+/// What running the kdray binary gave: exit status, stdout and stderr.
+struct CommandResult {
+    int status = -1;
+    std::string out, err;
+};
+/// Runs the kdray binary built beside the tests with `args` (no shell expansion of them).
+CommandResult run_kdray(const std::vector<std::string>& args);
+
+/// A fresh, empty folder for one test, under the system's temporary folder.
+std::filesystem::path fresh_temp_dir(const std::string& name);
+
+/// Writes `text` to `path` (creating parent folders) and returns the path.
+std::filesystem::path write_text_file(const std::filesystem::path& path, const std::string& text);
+
 /// The repository root (for testdata/) and ../shared beside it (may not exist).
 std::filesystem::path source_dir();
 std::filesystem::path shared_dir();

@@ -1,0 +1,31 @@
+// frame.h — what rendering a frame produces, whichever renderer ran: the shaded image, the
+// centre-ray hits for the AOV, and the rays cast by kind.
+#pragma once
+
+#include <cstdint>
+
+#include "core/image.h"
+#include "core/kd_shared.h"
+
+namespace kdray {
+
+/// Rays cast in a frame, by kind (64-bit: a long, many-sample frame outgrows 32 bits).
+struct RayTotals {
+    std::uint64_t primary = 0, shadow = 0, reflection = 0, refraction = 0;
+
+    void add(const KdRayCounts& pixel) {
+        primary += pixel.primary;
+        shadow += pixel.shadow;
+        reflection += pixel.reflection;
+        refraction += pixel.refraction;
+    }
+    std::uint64_t total() const { return primary + shadow + reflection + refraction; }
+};
+
+struct FrameResult {
+    HitBuffer hits;
+    Image image;
+    RayTotals rays;
+};
+
+}  // namespace kdray

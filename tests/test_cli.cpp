@@ -1,0 +1,182 @@
+// The kdray command line, run as a user runs it: what it prints, the files it writes (and does not
+// write on bad input), and its exit status. Results are checked against the library run
+// in-process and against brute force, never against the command's own earlier output.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "core/camera.h"
+#include "core/image.h"
+#include "core/kd_render.h"
+#include "core/natural_order.h"
+#include "core/reference_builder.h"
+#include "core/render_setup.h"
+#include "core/tree_file.h"
+#include "core/tree_stats.h"
+#include "tests/support.h"
+
+namespace fs = std::filesystem;
+using namespace kdray;
+using namespace kdray::test;
+
+namespace {
+
+/// An OBJ of the given scene's triangles, one shape, no materials.
+fs::path write_obj(const fs::path& path, const Scene& scene) {
+    std::ostringstream obj;
+    obj.precision(9);
+    for (std::size_t t = 0; t < scene.triangle_count(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            Vec3 v = scene.vertex(t, k);
+            obj << "v " << v.x << ' ' << v.y << ' ' << v.z << '\n';
+        }
+    for (std::size_t t = 0; t < scene.triangle_count(); ++t)
+        obj << "f " << 3 * t + 1 << ' ' << 3 * t + 2 << ' ' << 3 * t + 3 << '\n';
+    return write_text_file(path, obj.str());
+}
+
+nlohmann::json read_json(const fs::path& path) {
+    std::ifstream in(path);
+    return nlohmann::json::parse(in);
+}
+
+const char* kSmallRender = R"({
+  "image": {"width": 48, "height": 32},
+  "camera": {"position": [0.5, 0.5, 3], "look_at": [0.5, 0.5, 0.5], "up": [0, 1, 0], "fov_y": 50},
+  "lights": [{"type": "point", "position": [0.5, 3, 2], "intensity": [10, 10, 10]}]
+})";
+
+}  // namespace
+
+TEST_CASE("natural order puts frame_2 before frame_10") {
+    CHECK(natural_less("frame_2.obj", "frame_10.obj"));
+    CHECK_FALSE(natural_less("frame_10.obj", "frame_2.obj"));
+    CHECK(natural_less("a/frame_009.obj", "a/frame_010.obj"));
+    CHECK(natural_less("frame.obj", "frame_1.obj"));
+}
+
+TEST_CASE("kdray build --json reports the tree the reference builder makes in-process") {
+    fs::path dir = fresh_temp_dir("cli-build");
+    Scene scene = random_triangles(300, 11);
+    fs::path obj = write_obj(dir / "scene.obj", scene);
+    CommandResult r = run_kdray({"build", obj.string(), "--builder", "reference", "--json", "-o",
+                                 (dir / "scene.kdt").string()});
+    REQUIRE_MESSAGE(r.status == 0, r.err);
+    nlohmann::json j = nlohmann::json::parse(r.out);
+    for (const char* key : {"nodes", "leaves", "sah_cost", "build_ms", "timings_ms", "max_depth"})
+        CHECK_MESSAGE(j.contains(key), key);
+
+    KdTree expected = build_reference(load_obj(obj));
+    CHECK(j["nodes"].get<std::size_t>() == expected.nodes.size());
+    TreeStats stats = compute_tree_stats(expected, scene.triangle_count(), expected.params.costs);
+    CHECK(j["sah_cost"].get<double>() == doctest::Approx(stats.sah_cost).epsilon(1e-9));
+    CHECK(j["scene"]["triangles"].get<std::size_t>() == 300);
+
+    // The saved tree is the same tree, and `kdray stats` reads it back.
+    TreeFile file = read_tree_file(dir / "scene.kdt");
+    REQUIRE(file.tree.nodes.size() == expected.nodes.size());
+    for (std::size_t i = 0; i < expected.nodes.size(); ++i) {
+        CHECK(file.tree.nodes[i].split_or_count == expected.nodes[i].split_or_count);
+        CHECK(file.tree.nodes[i].axis_and_offset == expected.nodes[i].axis_and_offset);
+    }
+    CHECK(file.scene_triangles == 300);
+    CommandResult s = run_kdray({"stats", (dir / "scene.kdt").string(), "--json"});
+    REQUIRE_MESSAGE(s.status == 0, s.err);
+    CHECK(nlohmann::json::parse(s.out)["tree"]["nodes"].get<std::size_t>() ==
+          expected.nodes.size());
+    fs::remove_all(dir);
+}
+
+TEST_CASE("kdray render writes images, AOVs that agree with brute force, and stats.json") {
+    fs::path dir = fresh_temp_dir("cli-render");
+    Scene scene = random_triangles(400, 12);
+    // Frames given out of order: the run must put frame_2 before frame_10.
+    write_obj(dir / "in" / "frame_10.obj", scene);
+    write_obj(dir / "in" / "frame_2.obj", scene);
+    fs::path render = write_text_file(dir / "render.json", kSmallRender);
+    fs::path out = dir / "out";
+    CommandResult r = run_kdray({"render", (dir / "in" / "frame_10.obj").string(),
+                                 (dir / "in" / "frame_2.obj").string(), "-o", out.string(),
+                                 "--camera", render.string(), "--aov", "--builder", "reference",
+                                 "--tracer", "reference", "-q"});
+    REQUIRE_MESSAGE(r.status == 0, r.err);
+    CHECK(fs::exists(out / "frame_2.png"));
+    CHECK(fs::exists(out / "frame_10.png"));
+    REQUIRE(fs::exists(out / "frame_2.aov.exr"));
+
+    nlohmann::json stats = read_json(out / "stats.json");
+    REQUIRE(stats["frames"].size() == 2);
+    CHECK(fs::path(stats["frames"][0]["input"].get<std::string>()).filename() == "frame_2.obj");
+    CHECK(stats["frames"][0]["rays"]["primary"].get<std::size_t>() == 48 * 32);
+    CHECK(stats["summary"]["frames"].get<int>() == 2);
+
+    // Every pixel's hit equals brute force along the camera ray of conventions.md.
+    HitBuffer aov = read_aov(out / "frame_2.aov.exr");
+    RenderSettings settings = load_render_file(render);
+    Scene loaded = load_obj(dir / "in" / "frame_2.obj");
+    RenderInputs inputs = prepare_render(loaded, settings, settings.camera_at(0), 0);
+    REQUIRE(aov.width == 48);
+    REQUIRE(aov.height == 32);
+    int mismatches = 0, hits = 0;
+    for (int y = 0; y < aov.height; ++y)
+        for (int x = 0; x < aov.width; ++x) {
+            KdRay ray = kd_camera_ray(&inputs.view, float(x) + 0.5f, float(y) + 0.5f);
+            KdHit expected = brute_force_closest(loaded, ray);
+            hits += expected.prim != KDRAY_NO_HIT;
+            mismatches += !hits_agree(aov.hits[std::size_t(y) * aov.width + x], expected);
+        }
+    CHECK(hits > 100);
+    CHECK(mismatches == 0);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("bad input: one error line naming the file, exit status 1, no output written") {
+    fs::path dir = fresh_temp_dir("cli-bad");
+    fs::path out = dir / "out";
+
+    SUBCASE("a missing scene") {
+        CommandResult r = run_kdray({"render", (dir / "missing.obj").string(), "-o", out.string(),
+                                     "--builder", "reference", "-q"});
+        CHECK(r.status == 1);
+        CHECK(r.err.find("missing.obj") != std::string::npos);
+        CHECK(r.err.rfind("kdray: error: ", 0) == 0);
+        CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    }
+    SUBCASE("a NaN vertex names the file and the line") {
+        fs::path obj = write_text_file(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
+        CommandResult r =
+            run_kdray({"render", obj.string(), "-o", out.string(), "--builder", "reference", "-q"});
+        CHECK(r.status == 1);
+        CHECK(r.err.find("nan.obj:3") != std::string::npos);
+        CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    }
+    SUBCASE("a malformed render file names the file") {
+        fs::path obj = write_obj(dir / "ok.obj", random_triangles(10, 1));
+        fs::path json = write_text_file(dir / "bad.json", "{\"image\": {\"width\": 64,");
+        CommandResult r = run_kdray({"render", obj.string(), "-o", out.string(), "--camera",
+                                     json.string(), "--builder", "reference", "-q"});
+        CHECK(r.status == 1);
+        CHECK(r.err.find("bad.json") != std::string::npos);
+    }
+    SUBCASE("an output folder that cannot be created") {
+        fs::path obj = write_obj(dir / "ok.obj", random_triangles(10, 1));
+        fs::path blocker = write_text_file(dir / "file", "not a folder");
+        CommandResult r = run_kdray({"render", obj.string(), "-o", (blocker / "out").string(),
+                                     "--builder", "reference", "-q"});
+        CHECK(r.status == 1);
+        CHECK(r.err.find("file/out") != std::string::npos);
+    }
+    SUBCASE("an unknown option is a usage error") {
+        CommandResult r = run_kdray({"build", "x.obj", "--no-such-option"});
+        CHECK(r.status == 2);
+    }
+    // Exactly one line on stderr, and nothing written for the failed run.
+    CHECK_FALSE(fs::exists(out / "stats.json"));
+    if (fs::exists(out)) CHECK(fs::is_empty(out));
+    fs::remove_all(dir);
+}
