@@ -13,7 +13,8 @@ namespace kdray::cli {
 
 int run_build(const BuildCommand& command) {
     Scene scene = load_obj(command.scene);
-    TreeBuilder builder(command.builder);
+    DeviceSession session(command.builder.device);
+    TreeBuilder builder(command.builder, session);
     BuiltTree built = builder.build(scene);
     std::vector<double> samples;
     if (command.repeat > 1) {

@@ -8,7 +8,9 @@
 #include <filesystem>
 #include <iostream>
 
+#include "cl/opencl_renderer.h"
 #include "cli/commands.h"
+#include "cli/device_session.h"
 #include "cli/inputs.h"
 #include "cli/report.h"
 #include "cli/tree_builder.h"
@@ -17,6 +19,7 @@
 #include "core/error.h"
 #include "core/reference_tracer.h"
 #include "core/render_file.h"
+#include "core/render_setup.h"
 #include "core/scene.h"
 
 namespace kdray::cli {
@@ -50,14 +53,15 @@ void show_progress(std::size_t done, std::size_t total, double elapsed_ms) {
 
 int run_render(const RenderCommand& command) {
     // Check everything that can be checked before the first frame costs time.
-    if (command.tracer == "opencl")
-        throw Error("the OpenCL tracer is not available in this build yet; use --tracer reference");
     std::vector<std::string> inputs = expand_inputs(command.inputs);
     RenderSettings settings;
     if (!command.render_file.empty()) settings = load_render_file(command.render_file);
     const std::filesystem::path out_dir = command.output_dir;
+    DeviceSession session(command.builder.device);
+    TreeBuilder builder(command.builder, session);
+    const bool opencl_tracer = command.tracer == "opencl";
+    if (opencl_tracer || command.builder.builder == "opencl") session.device();
     create_output_dir(out_dir);
-    TreeBuilder builder(command.builder);
     const bool progress = !command.quiet && ::isatty(STDERR_FILENO);
 
     nlohmann::json frames = nlohmann::json::array();
@@ -73,7 +77,10 @@ int run_render(const RenderCommand& command) {
 
         BuiltTree built = builder.build(scene);
         auto trace_start = Clock::now();
-        FrameResult result = render_reference(built.tree, scene, settings, camera, command.threads);
+        RenderInputs render_inputs = prepare_render(scene, settings, camera, kd_u32(i));
+        FrameResult result =
+            opencl_tracer ? render_opencl(session.device(), built.tree, scene, render_inputs)
+                          : render_reference(built.tree, scene, render_inputs, command.threads);
         double trace_ms = ms_since(trace_start);
 
         std::string stem = std::filesystem::path(inputs[i]).stem().string();
@@ -87,7 +94,7 @@ int run_render(const RenderCommand& command) {
         double frame_ms = ms_since(frame_start);
         frame_times.push_back(frame_ms);
 
-        std::size_t rays = std::size_t(settings.width) * std::size_t(settings.height);
+        const RayTotals& rays = result.rays;
         nlohmann::json frame = {
             {"frame", i},
             {"input", inputs[i]},
@@ -95,12 +102,17 @@ int run_render(const RenderCommand& command) {
             {"scene", scene_json(scene)},
             {"tree", tree_json(built, scene.triangle_count())},
             {"tracer", command.tracer},
+            {"effects", render_inputs.effects.to_json()},
             {"load_ms", load_ms},
             {"build_ms", built.report.build_ms},
             {"trace_ms", trace_ms},
             {"frame_ms", frame_ms},
-            {"rays", {{"primary", rays}}},
-            {"mrays_per_s", trace_ms > 0 ? double(rays) / (trace_ms * 1e3) : 0.0}};
+            {"rays",
+             {{"primary", rays.primary},
+              {"shadow", rays.shadow},
+              {"reflection", rays.reflection},
+              {"refraction", rays.refraction}}},
+            {"mrays_per_s", trace_ms > 0 ? double(rays.total()) / (trace_ms * 1e3) : 0.0}};
         if (command.aov) frame["aov"] = aov_path.filename().string();
         frames.push_back(frame);
         for (const std::string& warning : scene.warnings)

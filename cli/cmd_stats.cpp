@@ -69,7 +69,8 @@ int run_stats(const StatsCommand& command) {
     if (command.paths.empty()) {
         out = {{"devices", list_devices_json()}, {"defaults", defaults_json(command.builder)}};
     } else {
-        TreeBuilder builder(command.builder);
+        DeviceSession session(command.builder.device);
+        TreeBuilder builder(command.builder, session);
         nlohmann::json items = nlohmann::json::array();
         for (const std::string& path : command.paths) items.push_back(path_json(path, builder));
         out = command.paths.size() == 1 ? items[0] : nlohmann::json{{"items", items}};

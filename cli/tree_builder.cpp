@@ -2,38 +2,31 @@
 
 #include <chrono>
 
-#include "core/error.h"
+#include "cl/opencl_builder.h"
 #include "core/reference_builder.h"
 
 namespace kdray::cli {
 
-struct TreeBuilder::OpenCl {};
-
-TreeBuilder::TreeBuilder(BuilderOptions options) : options_(std::move(options)) {}
-TreeBuilder::~TreeBuilder() = default;
-
-TreeBuilder::OpenCl& TreeBuilder::opencl() {
-    throw Error("the OpenCL builder is not available in this build yet; use --builder reference");
-}
+TreeBuilder::TreeBuilder(BuilderOptions options, DeviceSession& session)
+    : options_(std::move(options)), session_(session) {}
 
 std::string TreeBuilder::description() {
     if (options_.builder == "reference") return "reference (CPU, full SAH)";
-    opencl();
-    return "opencl";
+    return "opencl on " + session_.device().info().name;
 }
 
 BuiltTree TreeBuilder::build(const Scene& scene) {
     BuiltTree built;
-    auto start = std::chrono::steady_clock::now();
     if (options_.builder == "reference") {
+        auto start = std::chrono::steady_clock::now();
         built.tree = build_reference(scene, options_.params);
-    } else {
-        opencl();
-    }
-    built.report.build_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    if (built.report.timings_ms.empty())
+        built.report.build_ms =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                .count();
         built.report.timings_ms.push_back({"build", built.report.build_ms});
+    } else {
+        built.tree = build_opencl(session_.device(), scene, options_.params, &built.report);
+    }
     return built;
 }
 

@@ -1,12 +1,11 @@
 // tree_builder.h — runs the builder the user chose (OpenCL by default, or the CPU reference) and
-// times it. The OpenCL device and its programs are set up once, on first use, and reused for
-// every frame of a run.
+// times it. The OpenCL device is the run's DeviceSession, opened once and shared with the tracer.
 #pragma once
 
-#include <memory>
 #include <string>
 
 #include "cli/commands.h"
+#include "cli/device_session.h"
 #include "core/kd_tree.h"
 #include "core/scene.h"
 
@@ -19,21 +18,15 @@ struct BuiltTree {
 
 class TreeBuilder {
   public:
-    explicit TreeBuilder(BuilderOptions options);
-    ~TreeBuilder();
-    TreeBuilder(const TreeBuilder&) = delete;
-    TreeBuilder& operator=(const TreeBuilder&) = delete;
+    TreeBuilder(BuilderOptions options, DeviceSession& session);
 
     BuiltTree build(const Scene& scene);
-    /// "reference (CPU)" or "opencl on <device name>"; opens the device if not yet open.
+    /// "reference (CPU, full SAH)" or "opencl on <device name>"; opens the device if needed.
     std::string description();
 
   private:
-    struct OpenCl;
-    OpenCl& opencl();
-
     BuilderOptions options_;
-    std::unique_ptr<OpenCl> opencl_;
+    DeviceSession& session_;
 };
 
 }  // namespace kdray::cli

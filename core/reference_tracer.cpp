@@ -1,20 +1,19 @@
 // reference_tracer.cpp — the CPU reference tracer: kd_trace_closest of kd_traverse.h (the very code
-// the OpenCL kernels run) over batches of rays and over the pixels of a frame on std::threads, and
-// a deliberately simple shading (Lambert under point and directional lights, no shadows, plus
-// emission) so that the reference path yields a viewable picture.
+// the OpenCL kernels run) over batches of rays, and kd_render_pixel of kd_render.h (the shading the
+// render kernel runs) over the pixels of a frame on std::threads: the oracle for the OpenCL image.
 #include "core/reference_tracer.h"
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstddef>
-#include <numbers>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "core/camera.h"
 #include "core/error.h"
+#include "core/kd_render.h"
 #include "core/kd_traverse.h"
 
 namespace kdray {
@@ -97,89 +96,60 @@ std::vector<KdHit> trace_closest(const KdTree& tree, const Scene& scene,
     return hits;
 }
 
-FrameResult render_reference(const KdTree& tree, const Scene& scene, const RenderSettings& settings,
-                             const Camera& camera, int threads) {
-    const int width = settings.width, height = settings.height;
-    if (width <= 0 || height <= 0)
-        throw Error("render: image size " + std::to_string(width) + "x" + std::to_string(height) +
-                    " is empty");
+FrameResult render_reference(const KdTree& tree, const Scene& scene, const RenderInputs& inputs,
+                             int threads) {
+    const KdView& view = inputs.view;
+    if (view.width == 0 || view.height == 0)
+        throw Error("render: image size " + std::to_string(view.width) + "x" +
+                    std::to_string(view.height) + " is empty");
     const TraceInput in = trace_input(tree, scene);
     if (scene.material_ids.size() != scene.triangle_count())
         throw Error("scene " + scene.path.string() + ": " +
                     std::to_string(scene.material_ids.size()) + " material ids for " +
                     std::to_string(scene.triangle_count()) + " triangles");
     for (kd_u32 id : scene.material_ids)
-        if (id >= scene.materials.size())
+        if (id >= inputs.materials.size())
             throw Error("scene " + scene.path.string() + ": material id " + std::to_string(id) +
-                        " but only " + std::to_string(scene.materials.size()) + " materials");
+                        " but only " + std::to_string(inputs.materials.size()) + " materials");
 
-    const CameraRays rays(camera, width, height);
-    // Without lights the picture would be black (or emission only): a headlight, a directional
-    // light travelling along the view direction with irradiance 1, shows the shape instead.
-    std::vector<Light> lights = settings.lights;
-    if (lights.empty()) {
-        Light headlight;
-        headlight.type = Light::Type::directional;
-        headlight.direction = rays.forward;
-        headlight.intensity = {1, 1, 1};
-        lights.push_back(headlight);
-    }
+    // The scene as kd_render_pixel reads it: the same code the OpenCL render kernel runs.
+    KdSceneView scene_view{in.nodes,
+                           in.leaf_indices,
+                           in.triangles,
+                           scene.material_ids.data(),
+                           inputs.materials.data(),
+                           inputs.lights.data(),
+                           {}};
+    std::copy(in.bounds, in.bounds + 6, scene_view.bounds);
 
     FrameResult frame;
-    frame.hits.width = frame.image.width = width;
-    frame.hits.height = frame.image.height = height;
-    const std::size_t pixels = std::size_t(width) * std::size_t(height);
+    frame.hits.width = frame.image.width = int(view.width);
+    frame.hits.height = frame.image.height = int(view.height);
+    const std::size_t pixels = std::size_t(view.width) * std::size_t(view.height);
     frame.hits.hits.resize(pixels);
     frame.hits.normals.resize(pixels);
     frame.image.rgb.resize(3 * pixels);
-
-    auto shade_pixel = [&](int x, int y) {
-        const std::size_t index = std::size_t(y) * std::size_t(width) + std::size_t(x);
-        const KdRay ray = rays.ray(float(x) + 0.5f, float(y) + 0.5f);
-        const KdHit hit = trace_one(in, ray);
-        frame.hits.hits[index] = hit;
-        Vec3 color = settings.background;
-        Vec3 normal{0, 0, 0};
-        if (hit.prim != KDRAY_NO_HIT) {
-            // Geometric normal, turned to face the ray: triangles are two-sided.
-            const Vec3 v0 = scene.vertex(hit.prim, 0), v1 = scene.vertex(hit.prim, 1),
-                       v2 = scene.vertex(hit.prim, 2);
-            const Vec3 dir{ray.dir[0], ray.dir[1], ray.dir[2]};
-            normal = normalize(cross(v1 - v0, v2 - v0));
-            if (dot(normal, dir) > 0.0f) normal = -normal;
-            const Vec3 p = Vec3{ray.org[0], ray.org[1], ray.org[2]} + dir * hit.t;
-
-            // Lambert: outgoing radiance = Kd / pi * irradiance, where a point light of intensity
-            // I at distance r gives I cos(theta) / r^2 and a directional light E cos(theta).
-            const Material& material = scene.materials[scene.material_ids[hit.prim]];
-            Vec3 irradiance{0, 0, 0};
-            for (const Light& light : lights) {
-                if (light.type == Light::Type::point) {
-                    const Vec3 to_light = light.position - p;
-                    const float r2 = dot(to_light, to_light);
-                    if (r2 <= 0.0f) continue;
-                    const float cos_theta = dot(normal, to_light) / std::sqrt(r2);
-                    if (cos_theta > 0.0f)
-                        irradiance = irradiance + light.intensity * (cos_theta / r2);
-                } else {
-                    const float cos_theta = -dot(normal, normalize(light.direction));
-                    if (cos_theta > 0.0f) irradiance = irradiance + light.intensity * cos_theta;
-                }
-            }
-            color =
-                material.diffuse * irradiance * std::numbers::inv_pi_v<float> + material.emission;
-        }
-        frame.hits.normals[index] = normal;
-        frame.image.rgb[3 * index + 0] = color.x;
-        frame.image.rgb[3 * index + 1] = color.y;
-        frame.image.rgb[3 * index + 2] = color.z;
-    };
+    std::vector<KdRayCounts> counts(pixels);
 
     // Rows handed out dynamically: a row is a few hundred rays, and neighbouring rows cost alike.
-    parallel_chunks(std::size_t(height), 1, threads, [&](std::size_t begin, std::size_t end) {
+    parallel_chunks(std::size_t(view.height), 1, threads, [&](std::size_t begin, std::size_t end) {
         for (std::size_t y = begin; y < end; ++y)
-            for (int x = 0; x < width; ++x) shade_pixel(x, int(y));
+            for (kd_u32 x = 0; x < view.width; ++x) {
+                const std::size_t i = y * view.width + x;
+                if (in.empty) {
+                    frame.hits.hits[i] = KdHit{INFINITY, KDRAY_NO_HIT, 0.0f, 0.0f};
+                    for (int c = 0; c < 3; ++c) frame.image.rgb[3 * i + c] = view.background[c];
+                    counts[i].primary = view.spp;
+                    continue;
+                }
+                const KdPixel p = kd_render_pixel(&scene_view, &view, x, kd_u32(y));
+                frame.hits.hits[i] = p.centre_hit;
+                frame.hits.normals[i] = {p.normal[0], p.normal[1], p.normal[2]};
+                for (int c = 0; c < 3; ++c) frame.image.rgb[3 * i + c] = p.rgb[c];
+                counts[i] = p.rays;
+            }
     });
+    for (const KdRayCounts& c : counts) frame.rays.add(c);
     return frame;
 }
 

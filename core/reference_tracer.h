@@ -1,6 +1,5 @@
 // reference_tracer.h — the CPU reference tracer: the shared kd-tree walk of kd_traverse.h run over
-// all pixels on std::threads, and simple shading (Lambert under the render file's lights, or a
-// headlight when there are none) so that the reference path produces a picture.
+// all pixels on std::threads, and the shared shading of kd_render.h over a frame's pixels.
 #pragma once
 
 #include <vector>
@@ -10,6 +9,7 @@
 #include "core/kd_shared.h"
 #include "core/kd_tree.h"
 #include "core/render_file.h"
+#include "core/render_setup.h"
 #include "core/scene.h"
 
 namespace kdray {
@@ -18,8 +18,9 @@ namespace kdray {
 std::vector<KdHit> trace_closest(const KdTree& tree, const Scene& scene,
                                  const std::vector<KdRay>& rays, int threads = 0);
 
-/// One frame: the centre-ray hits (the AOV) and the shaded image.
-FrameResult render_reference(const KdTree& tree, const Scene& scene, const RenderSettings& settings,
-                             const Camera& camera, int threads = 0);
+/// One frame (the centre-ray hits for the AOV, the shaded image, the rays cast), shaded by
+/// kd_render_pixel exactly as the OpenCL render kernel shades it.
+FrameResult render_reference(const KdTree& tree, const Scene& scene, const RenderInputs& inputs,
+                             int threads = 0);
 
 }  // namespace kdray

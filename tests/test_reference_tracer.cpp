@@ -280,7 +280,8 @@ TEST_CASE("render_reference on a closed-form scene") {
     const float inv_pi = std::numbers::inv_pi_v<float>;
 
     SUBCASE("headlight: E = 1 along the view direction, cos = 1 on the facing quad") {
-        const FrameResult frame = render_reference(tree, scene, settings, camera, 2);
+        const FrameResult frame =
+            render_reference(tree, scene, prepare_render(scene, settings, camera, 0), 2);
         REQUIRE(frame.image.rgb.size() == 16u * 12u * 3u);
         REQUIRE(frame.hits.normals.size() == 16u * 12u);
         for (std::size_t i = 0; i < frame.hits.hits.size(); ++i) {
@@ -292,7 +293,8 @@ TEST_CASE("render_reference on a closed-form scene") {
     }
     SUBCASE("a point light at the camera: E = I cos / r^2 with cos = 5 / r") {
         settings.lights.push_back(Light{Light::Type::point, {0, 0, 5}, {0, -1, 0}, {20, 10, 5}});
-        const FrameResult frame = render_reference(tree, scene, settings, camera, 2);
+        const FrameResult frame =
+            render_reference(tree, scene, prepare_render(scene, settings, camera, 0), 2);
         for (std::size_t i = 0; i < frame.hits.hits.size(); ++i) {
             const double t = frame.hits.hits[i].t;  // also the distance to the light
             const double e = 5.0 / t / (t * t);
@@ -308,7 +310,8 @@ TEST_CASE("render_reference on a closed-form scene") {
         settings.lights.push_back(Light{Light::Type::directional, {}, dir, {3, 3, 3}});
         settings.lights.push_back(Light{Light::Type::directional, {}, {0, 0, 1}, {9, 9, 9}});
         scene.materials[0].emission = {0.25f, 0, 0};
-        const FrameResult frame = render_reference(tree, scene, settings, camera, 2);
+        const FrameResult frame =
+            render_reference(tree, scene, prepare_render(scene, settings, camera, 0), 2);
         const double lambert = 0.5 / std::numbers::pi * 3.0 * (2.0 / 3.0);
         for (std::size_t i = 0; i < frame.hits.hits.size(); ++i) {
             CHECK(frame.image.rgb[3 * i + 0] == doctest::Approx(lambert + 0.25).epsilon(1e-5));
@@ -317,7 +320,8 @@ TEST_CASE("render_reference on a closed-form scene") {
     }
     SUBCASE("distances follow the camera model; misses get the background") {
         camera.look_at = {0, 8, 0};  // the upper rows look past the quad's top edge (y = 10)
-        const FrameResult frame = render_reference(tree, scene, settings, camera, 2);
+        const FrameResult frame =
+            render_reference(tree, scene, prepare_render(scene, settings, camera, 0), 2);
         int misses = 0;
         for (std::size_t i = 0; i < frame.hits.hits.size(); ++i) {
             const KdHit& hit = frame.hits.hits[i];
