@@ -1,0 +1,148 @@
+/* build_common.cl — helpers the kd-tree build kernels share (included by build_large.cl,
+ * build_small.cl and build_output.cl; it holds no kernel of its own).
+ *
+ * Boxes travel as 6 floats, lo.xyz hi.xyz; triangle references carry their box clipped to the
+ * node that holds them, as in Zhou et al. (2008), §4.1 ("the bounding box of each triangle is
+ * clipped to the node"). */
+#ifndef KDRAY_BUILD_COMMON_CL
+#define KDRAY_BUILD_COMMON_CL
+
+#include "core/kd_shared.h"
+
+/* Child bits of a reference: bit 0 = below (lower coordinates), bit 1 = above. */
+#define KDRAY_BELOW 1u
+#define KDRAY_ABOVE 2u
+
+typedef struct KdBox {
+    float3 lo, hi;
+} KdBox;
+
+inline float kd_axis_of(float3 v, uint axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+
+inline float3 kd_with_axis(float3 v, uint axis, float x) {
+    if (axis == 0) v.x = x;
+    else if (axis == 1) v.y = x;
+    else v.z = x;
+    return v;
+}
+
+inline KdBox kd_load_box(__global const float* boxes, size_t i) {
+    __global const float* b = boxes + i * 6;
+    KdBox box;
+    box.lo = (float3)(b[0], b[1], b[2]);
+    box.hi = (float3)(b[3], b[4], b[5]);
+    return box;
+}
+
+inline void kd_store_box(__global float* boxes, size_t i, KdBox box) {
+    __global float* b = boxes + i * 6;
+    b[0] = box.lo.x, b[1] = box.lo.y, b[2] = box.lo.z;
+    b[3] = box.hi.x, b[4] = box.hi.y, b[5] = box.hi.z;
+}
+
+inline float kd_box_area(KdBox b) {
+    const float3 e = fmax(b.hi - b.lo, (float3)(0.0f));
+    return 2.0f * (e.x * e.y + e.y * e.z + e.z * e.x);
+}
+
+/* The box of one side of a split: below keeps [lo, split], above [split, hi] on the axis. */
+inline KdBox kd_child_box(KdBox b, uint axis, float split, uint side) {
+    if (side == 0) b.hi = kd_with_axis(b.hi, axis, split);
+    else b.lo = kd_with_axis(b.lo, axis, split);
+    return b;
+}
+
+/* The one rule for which children of the plane `split` a reference spanning [lo, hi] on the axis
+ * goes to, used alike by the large-node split, the small-node split masks and therefore the SAH
+ * counts: below when it starts below the plane, above when it ends above it, so a triangle that
+ * only touches the plane stays on its own side. A reference lying flat in the plane goes to one
+ * side only, `planar_sides` (below for a median or SAH split, the kept side for an empty-space
+ * cut): a ray that meets it crosses or lies in the plane, so the walk visits both children anyway,
+ * and copying it to both would double every face of an axis-aligned model at every split. */
+inline uint kd_classify(float lo, float hi, float split, uint planar_sides) {
+    uint sides = 0;
+    if (lo < split) sides |= KDRAY_BELOW;
+    if (hi > split) sides |= KDRAY_ABOVE;
+    return sides ? sides : planar_sides;
+}
+
+/* Bounds of the part of triangle `tri` (9 floats) inside `box`: the "perfect split" clipping that
+ * the reference builder does too (Wald & Havran 2006), by Sutherland–Hodgman against the box's six
+ * planes. The box is first grown by a few ulps of its magnitude so that float rounding in the
+ * clipping can only make the result larger, never lose a part that really enters the box; the
+ * result is then cut back to the box. Returns 0 when the triangle misses the grown box. */
+inline int kd_clip_triangle_bounds(__global const float* tri, KdBox box, KdBox* out) {
+    const float3 magnitude = fmax(fabs(box.lo), fabs(box.hi));
+    const float eps = 8.0f * FLT_EPSILON * fmax(magnitude.x, fmax(magnitude.y, magnitude.z));
+    const float3 lo = box.lo - eps, hi = box.hi + eps;
+    float3 poly[2][9];
+    uint count = 3;
+    poly[0][0] = (float3)(tri[0], tri[1], tri[2]);
+    poly[0][1] = (float3)(tri[3], tri[4], tri[5]);
+    poly[0][2] = (float3)(tri[6], tri[7], tri[8]);
+    uint cur = 0;
+    for (uint plane = 0; plane < 6 && count > 0; ++plane) {
+        const uint axis = plane / 2;
+        const int keep_above = (plane % 2) == 0; /* even planes: x >= lo; odd: x <= hi */
+        const float pos = kd_axis_of(keep_above ? lo : hi, axis);
+        uint n = 0;
+        for (uint v = 0; v < count; ++v) {
+            const float3 a = poly[cur][v], b = poly[cur][(v + 1) % count];
+            const float da = kd_axis_of(a, axis) - pos, db = kd_axis_of(b, axis) - pos;
+            const int in_a = keep_above ? da >= 0.0f : da <= 0.0f;
+            const int in_b = keep_above ? db >= 0.0f : db <= 0.0f;
+            if (in_a) poly[1 - cur][n++] = a;
+            if (in_a != in_b) poly[1 - cur][n++] = kd_with_axis(a + (b - a) * (da / (da - db)), axis, pos);
+        }
+        cur = 1 - cur;
+        count = n;
+    }
+    if (count == 0) return 0;
+    float3 bmin = poly[cur][0], bmax = poly[cur][0];
+    for (uint v = 1; v < count; ++v) {
+        bmin = fmin(bmin, poly[cur][v]);
+        bmax = fmax(bmax, poly[cur][v]);
+    }
+    out->lo = fmin(fmax(bmin, box.lo), box.hi);
+    out->hi = fmax(fmin(bmax, box.hi), box.lo);
+    return 1;
+}
+
+/* Index of the last of the n ascending `starts` that is <= x: the segment holding element x. */
+inline uint kd_find_segment(__global const uint* starts, uint n, uint x) {
+    uint lo = 0, hi = n;
+    while (hi - lo > 1) {
+        const uint mid = (lo + hi) / 2;
+        if (starts[mid] <= x) lo = mid;
+        else hi = mid;
+    }
+    return lo;
+}
+
+inline KdBuildNode kd_build_leaf(uint count, uint first, ulong mask) {
+    KdBuildNode n;
+    n.axis = KDRAY_LEAF_AXIS;
+    n.split = 0.0f;
+    n.child[0] = 0;
+    n.child[1] = 0;
+    n.leaf_count = count;
+    n.leaf_first = first;
+    n.mask_lo = (uint)mask;
+    n.mask_hi = (uint)(mask >> 32);
+    return n;
+}
+
+inline KdBuildNode kd_build_inner(uint axis, float split, uint below, uint above) {
+    KdBuildNode n;
+    n.axis = axis;
+    n.split = split;
+    n.child[0] = below;
+    n.child[1] = above;
+    n.leaf_count = 0;
+    n.leaf_first = 0;
+    n.mask_lo = 0;
+    n.mask_hi = 0;
+    return n;
+}
+
+#endif /* KDRAY_BUILD_COMMON_CL */

@@ -1,0 +1,298 @@
+/* build_large.cl — the first two steps of Zhou, Hou, Wang & Guo, "Real-time kd-tree construction
+ * on graphics hardware" (ACM TOG 27(5), 2008): triangle bounding boxes, and the large-node stage
+ * (§4.1), which processes every active large node of one tree level at once.
+ *
+ * One level, as the host chains it (cl/large_node_stage.cpp):
+ *   node bounds       segmented reduction of the nodes' reference boxes (primitives.cl)
+ *   kd_split_large_nodes       empty-space cutting or spatial median, per node
+ *   kd_classify_references     below/above flags per reference -> scanned into ranks
+ *   kd_count_large_children    child sizes and kinds per node -> "slot" values, scanned
+ *   kd_emit_large_children     node records, next level's large nodes, new small roots
+ *   kd_distribute_references   references (clipped) into the next level / small roots / leaves
+ *
+ * Slots: every node of the level owns two child slots (2i below, 2i+1 above), and the slot arrays
+ * hold KDRAY_SLOT_KINDS segments of 2M values each (the host's SlotKind enum passes the segment
+ * numbers as -D defines). One scan over all segments at once gives, for each slot and kind, its
+ * rank: the index of a new large node, its first reference, ... A value is the difference of
+ * neighbouring scanned entries, so the scans run in place. */
+#include "cl/kernels/build_common.cl"
+
+/* Step 1 of §4: each triangle's bounding box, and the identity reference list of the root. */
+__kernel void kd_compute_aabbs(__global const float* triangles, uint count,
+                               __global float* boxes, __global uint* ref_tri) {
+    const uint i = get_global_id(0);
+    if (i >= count) return;
+    __global const float* t = triangles + (size_t)i * KDRAY_FLOATS_PER_TRIANGLE;
+    const float3 a = (float3)(t[0], t[1], t[2]);
+    const float3 b = (float3)(t[3], t[4], t[5]);
+    const float3 c = (float3)(t[6], t[7], t[8]);
+    KdBox box;
+    box.lo = fmin(a, fmin(b, c));
+    box.hi = fmax(a, fmax(b, c));
+    kd_store_box(boxes, i, box);
+    ref_tri[i] = i;
+}
+
+/* Split large nodes (§4.1): cut off empty space when the empty slab on one side of the node's
+ * tight box exceeds C_e of the node's extent (the largest such slab wins), otherwise split the
+ * node's box at the spatial median of its longest axis. Nodes at the depth limit, or on a level
+ * that would outgrow the reference budget (force_leaf), become leaves. */
+__kernel void kd_split_large_nodes(uint nodes, __global const float* node_box,
+                                   __global const float* tight_box, uint force_leaf,
+                                   float empty_ratio, __global uint* split_axis,
+                                   __global float* split_pos, __global uint* planar_sides) {
+    const uint i = get_global_id(0);
+    if (i >= nodes) return;
+    if (force_leaf) {
+        split_axis[i] = KDRAY_LEAF_AXIS;
+        return;
+    }
+    const KdBox box = kd_load_box(node_box, i);
+    KdBox tight = kd_load_box(tight_box, i);
+    tight.lo = fmax(tight.lo, box.lo);
+    tight.hi = fmin(tight.hi, box.hi);
+    const float3 extent = box.hi - box.lo;
+
+    /* Empty space cutting: the widest empty slab relative to the node's extent. */
+    float best = empty_ratio;
+    uint axis = KDRAY_LEAF_AXIS, sides = 0;
+    float pos = 0.0f;
+    for (uint a = 0; a < 3; ++a) {
+        const float e = kd_axis_of(extent, a);
+        if (!(e > 0.0f)) continue;
+        const float gap_lo = (kd_axis_of(tight.lo, a) - kd_axis_of(box.lo, a)) / e;
+        const float gap_hi = (kd_axis_of(box.hi, a) - kd_axis_of(tight.hi, a)) / e;
+        if (gap_lo > best) {
+            best = gap_lo, axis = a, pos = kd_axis_of(tight.lo, a), sides = KDRAY_ABOVE;
+        }
+        if (gap_hi > best) {
+            best = gap_hi, axis = a, pos = kd_axis_of(tight.hi, a), sides = KDRAY_BELOW;
+        }
+    }
+    if (axis == KDRAY_LEAF_AXIS) {
+        /* Spatial median of the longest axis. A box flat in every axis cannot be split. */
+        axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+        const float lo = kd_axis_of(box.lo, axis), hi = kd_axis_of(box.hi, axis);
+        pos = 0.5f * (lo + hi);
+        sides = KDRAY_BELOW;
+        if (!(pos > lo && pos < hi)) axis = KDRAY_LEAF_AXIS;
+    }
+    split_axis[i] = axis;
+    split_pos[i] = pos;
+    planar_sides[i] = sides;
+}
+
+/* Classify each reference of the level: flags[r] = goes below, flags[refs + r] = goes above
+ * (0/1), scanned afterwards into ranks. References of leaf nodes get no flags. */
+__kernel void kd_classify_references(uint refs, __global const uint* ref_tri,
+                                     __global const float* ref_box,
+                                     __global const float* triangles, uint nodes,
+                                     __global const uint* node_ref_start,
+                                     __global const float* node_box,
+                                     __global const uint* split_axis,
+                                     __global const float* split_pos,
+                                     __global const uint* planar_sides, __global uint* flags) {
+    const uint r = get_global_id(0);
+    if (r >= refs) return;
+    const uint i = kd_find_segment(node_ref_start, nodes, r);
+    const uint axis = split_axis[i];
+    uint sides = 0;
+    if (axis != KDRAY_LEAF_AXIS) {
+        const KdBox b = kd_load_box(ref_box, r);
+        const float split = split_pos[i];
+        sides = kd_classify(kd_axis_of(b.lo, axis), kd_axis_of(b.hi, axis), split,
+                            planar_sides[i]);
+        if (sides == (KDRAY_BELOW | KDRAY_ABOVE)) {
+            /* The box straddles the plane; the triangle itself may still lie on one side of it
+             * within this node (a diagonal sliver): keep only the children it enters. */
+            const KdBox node = kd_load_box(node_box, i);
+            __global const float* tri =
+                triangles + (size_t)ref_tri[r] * KDRAY_FLOATS_PER_TRIANGLE;
+            KdBox clipped;
+            uint entered = 0;
+            if (kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, 0), &clipped))
+                entered |= KDRAY_BELOW;
+            if (kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, 1), &clipped))
+                entered |= KDRAY_ABOVE;
+            if (entered) sides = entered;
+        }
+    }
+    flags[r] = sides & KDRAY_BELOW ? 1u : 0u;
+    flags[refs + r] = sides & KDRAY_ABOVE ? 1u : 0u;
+}
+
+/* Value of slot `s` of kind `k` and its rank among the level's slots of that kind, from the
+ * in-place scanned slot array (slots = 2 * nodes per kind). */
+inline uint kd_slot_value(__global const uint* slot_rank, uint slots, uint k, uint s) {
+    return slot_rank[k * slots + s + 1] - slot_rank[k * slots + s];
+}
+inline uint kd_slot_rank(__global const uint* slot_rank, uint slots, uint k, uint s) {
+    return slot_rank[k * slots + s] - slot_rank[k * slots];
+}
+
+/* Count each node's children and give every child its kind: more than T references stay large,
+ * 1..T become small roots (§4.2), none an empty leaf. A split that separates nothing (both
+ * children keep all references, e.g. a stack of coincident triangles) would recurse forever, so
+ * the node becomes a leaf instead. */
+__kernel void kd_count_large_children(uint nodes, __global const uint* node_ref_start,
+                                      __global const uint* node_ref_count,
+                                      __global uint* split_axis, __global const uint* ref_rank,
+                                      uint refs, uint large_threshold, __global uint* slot_values) {
+    const uint i = get_global_id(0);
+    if (i >= nodes) return;
+    const uint slots = 2 * nodes;
+    for (uint k = 0; k < KDRAY_SLOT_KINDS; ++k) {
+        slot_values[k * slots + 2 * i] = 0;
+        slot_values[k * slots + 2 * i + 1] = 0;
+    }
+    const uint start = node_ref_start[i], count = node_ref_count[i];
+    uint axis = split_axis[i];
+    uint n[2] = {0, 0};
+    if (axis != KDRAY_LEAF_AXIS) {
+        n[0] = ref_rank[start + count] - ref_rank[start];
+        n[1] = ref_rank[refs + start + count] - ref_rank[refs + start];
+        if (n[0] == count && n[1] == count) {
+            axis = KDRAY_LEAF_AXIS;
+            split_axis[i] = axis;
+        }
+    }
+    if (axis == KDRAY_LEAF_AXIS) {
+        slot_values[KDRAY_SLOT_LEAF_REFS * slots + 2 * i] = count;
+        return;
+    }
+    for (uint side = 0; side < 2; ++side) {
+        const uint s = 2 * i + side;
+        slot_values[KDRAY_SLOT_CHILD * slots + s] = 1;
+        if (n[side] > large_threshold) {
+            slot_values[KDRAY_SLOT_LARGE * slots + s] = 1;
+            slot_values[KDRAY_SLOT_LARGE_REFS * slots + s] = n[side];
+            slot_values[KDRAY_SLOT_LARGE_CHUNKS * slots + s] =
+                (n[side] + KDRAY_REDUCE_CHUNK - 1) / KDRAY_REDUCE_CHUNK;
+        } else if (n[side] > 0) {
+            slot_values[KDRAY_SLOT_SMALL * slots + s] = 1;
+            slot_values[KDRAY_SLOT_SMALL_REFS * slots + s] = n[side];
+        }
+    }
+}
+
+/* Write this level's node records and create its children: the next level's large nodes, new
+ * small roots (appended to the small stage's first level) and empty leaves. Bases are where this
+ * level's new node ids, small roots, small references and leaf references start. */
+__kernel void kd_emit_large_children(
+    uint nodes, __global const float* node_box, __global const uint* node_ref_count,
+    __global const uint* node_id, __global const uint* split_axis,
+    __global const float* split_pos, __global const uint* slot_rank, uint node_base,
+    uint small_root_base, uint small_ref_base, uint leaf_ref_base, uint child_depth,
+    __global KdBuildNode* records, __global float* next_box, __global uint* next_ref_start,
+    __global uint* next_ref_count, __global uint* next_chunk_start, __global uint* next_node_id,
+    __global uint* root_ref_start, __global uint* root_ref_count, __global float* small_box,
+    __global ulong* small_mask, __global uint* small_root, __global uint* small_node_id,
+    __global uint* small_depth) {
+    const uint i = get_global_id(0);
+    if (i >= nodes) return;
+    const uint slots = 2 * nodes;
+    if (i == 0) {
+        /* The next level's chunk starts end with the total, as the reduction expects. */
+        const uint next_nodes = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE, slots);
+        next_chunk_start[next_nodes] =
+            kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_CHUNKS, slots);
+    }
+    const uint axis = split_axis[i];
+    if (axis == KDRAY_LEAF_AXIS) {
+        records[node_id[i]] = kd_build_leaf(
+            node_ref_count[i],
+            leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i), 0);
+        return;
+    }
+    const float split = split_pos[i];
+    const KdBox box = kd_load_box(node_box, i);
+    uint child_id[2];
+    for (uint side = 0; side < 2; ++side) {
+        const uint s = 2 * i + side;
+        const uint id = node_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_CHILD, s);
+        child_id[side] = id;
+        const KdBox child = kd_child_box(box, axis, split, side);
+        if (kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s)) {
+            const uint j = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE, s);
+            kd_store_box(next_box, j, child);
+            next_ref_start[j] = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s);
+            next_ref_count[j] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s);
+            next_chunk_start[j] = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_CHUNKS, s);
+            next_node_id[j] = id;
+        } else if (kd_slot_value(slot_rank, slots, KDRAY_SLOT_SMALL, s)) {
+            const uint q = small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
+            const uint n = kd_slot_value(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s);
+            root_ref_start[q] =
+                small_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s);
+            root_ref_count[q] = n;
+            /* A small root is the first small node of its subtree: all its triangles. */
+            kd_store_box(small_box, q, child);
+            small_mask[q] = n >= 64 ? ~0ul : ((1ul << n) - 1ul);
+            small_root[q] = q;
+            small_node_id[q] = id;
+            small_depth[q] = child_depth;
+        } else {
+            records[id] = kd_build_leaf(0, 0, 0);
+        }
+    }
+    records[node_id[i]] = kd_build_inner(axis, split, child_id[0], child_id[1]);
+}
+
+/* Move every reference to its children (clipping a straddling reference's box to each child's
+ * box, §4.1), to the next level, to its small root's list, or to the leaf store. */
+__kernel void kd_distribute_references(
+    uint refs, __global const uint* ref_tri, __global const float* ref_box,
+    __global const float* triangles, uint nodes, __global const uint* node_ref_start,
+    __global const float* node_box, __global const uint* split_axis,
+    __global const float* split_pos, __global const uint* ref_rank,
+    __global const uint* slot_rank, uint small_root_base, uint small_ref_base,
+    uint leaf_ref_base, __global uint* next_ref_tri, __global float* next_ref_box,
+    __global uint* small_ref_tri, __global float* small_ref_box, __global uint* small_ref_root,
+    __global uint* leaf_refs) {
+    const uint r = get_global_id(0);
+    if (r >= refs) return;
+    const uint slots = 2 * nodes;
+    const uint i = kd_find_segment(node_ref_start, nodes, r);
+    const uint start = node_ref_start[i];
+    const uint tri = ref_tri[r];
+    const uint axis = split_axis[i];
+    if (axis == KDRAY_LEAF_AXIS) {
+        leaf_refs[leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i) +
+                  (r - start)] = tri;
+        return;
+    }
+    const KdBox box = kd_load_box(ref_box, r);
+    const float split = split_pos[i];
+    const int straddles =
+        kd_axis_of(box.lo, axis) < split && kd_axis_of(box.hi, axis) > split;
+    for (uint side = 0; side < 2; ++side) {
+        const uint k = side * refs + r;
+        if (ref_rank[k + 1] == ref_rank[k]) continue; /* not in this child */
+        const uint within = ref_rank[k] - ref_rank[side * refs + start];
+        const uint s = 2 * i + side;
+        /* A box that lies on one side is kept; a straddling one becomes the bounds of the
+         * triangle's part in the child (at worst the box cut at the plane). */
+        KdBox b = box;
+        if (side == 0) b.hi = kd_with_axis(b.hi, axis, fmin(kd_axis_of(b.hi, axis), split));
+        else b.lo = kd_with_axis(b.lo, axis, fmax(kd_axis_of(b.lo, axis), split));
+        KdBox clipped;
+        if (straddles && kd_clip_triangle_bounds(
+                        triangles + (size_t)tri * KDRAY_FLOATS_PER_TRIANGLE,
+                        kd_child_box(kd_load_box(node_box, i), axis, split, side), &clipped)) {
+            b.lo = fmin(fmax(b.lo, clipped.lo), b.hi);
+            b.hi = fmax(fmin(b.hi, clipped.hi), b.lo);
+        }
+        if (kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s)) {
+            const uint dst = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s) + within;
+            next_ref_tri[dst] = tri;
+            kd_store_box(next_ref_box, dst, b);
+        } else {
+            const uint dst =
+                small_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s) + within;
+            small_ref_tri[dst] = tri;
+            kd_store_box(small_ref_box, dst, b);
+            small_ref_root[dst] =
+                small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
+        }
+    }
+}

@@ -1,0 +1,136 @@
+/* build_small.cl — the small-node stage of Zhou et al. (2008), §4.2: every small root (a node of
+ * at most T <= 64 triangles) is split by the full surface area heuristic, with the triangle sets
+ * of a node and of each split candidate held as 64-bit masks over the root's triangle list.
+ *
+ *   kd_compute_split_masks   preprocessing: per candidate plane, the masks of the root's triangles
+ *                            below and above it
+ *   kd_split_small_nodes     per small node of a level: the cheapest candidate, or a leaf
+ *   kd_emit_small_children   node records and the next level's small nodes
+ *
+ * Candidates are the boundaries of the root's (clipped) triangle boxes: candidate 6*ref + 2*axis
+ * + side lies at the box's lo (side 0) or hi (side 1) on that axis. */
+#include "cl/kernels/build_common.cl"
+
+/* Split candidates (§4.2, "small node preprocessing"): for each candidate plane the set of the
+ * root's triangles below it and the set above it, by the same rule (kd_classify) as every split. */
+__kernel void kd_compute_split_masks(uint candidates, __global const float* ref_box,
+                                     __global const uint* ref_root,
+                                     __global const uint* root_ref_start,
+                                     __global const uint* root_ref_count,
+                                     __global ulong* below_mask, __global ulong* above_mask) {
+    const uint c = get_global_id(0);
+    if (c >= candidates) return;
+    const uint ref = c / 6, axis = (c % 6) / 2, side = c % 2;
+    const float pos = ref_box[(size_t)ref * 6 + side * 3 + axis];
+    const uint root = ref_root[ref];
+    const uint start = root_ref_start[root], count = root_ref_count[root];
+    ulong below = 0, above = 0;
+    for (uint j = 0; j < count; ++j) {
+        __global const float* b = ref_box + (size_t)(start + j) * 6;
+        const uint sides = kd_classify(b[axis], b[3 + axis], pos, KDRAY_BELOW);
+        below |= (ulong)(sides & 1u) << j;
+        above |= (ulong)(sides >> 1) << j;
+    }
+    below_mask[c] = below;
+    above_mask[c] = above;
+}
+
+/* SAH split of small nodes (§4.2): for every candidate of the node's triangles that lies strictly
+ * inside the node's box, SAH(x) = C_t + C_i (N_L SA_L + N_R SA_R) / SA, the counts by popcount of
+ * the node's mask and the candidate's masks, scaled by (1 - empty_bonus) when a side is empty as
+ * in the reference builder. The node becomes a leaf when C_i N is no more than the best, at the
+ * depth limit, or when its box has no area. split_flag (0/1) is scanned into child positions. */
+__kernel void kd_split_small_nodes(uint nodes, __global const float* node_box,
+                                   __global const ulong* node_mask,
+                                   __global const uint* node_root, __global const uint* node_depth,
+                                   __global const float* ref_box,
+                                   __global const uint* root_ref_start,
+                                   __global const ulong* below_mask,
+                                   __global const ulong* above_mask, float cost_traversal,
+                                   float cost_intersection, float empty_bonus, uint max_depth,
+                                   __global uint* split_axis, __global float* split_pos,
+                                   __global ulong* child_mask, __global uint* split_flag) {
+    const uint i = get_global_id(0);
+    if (i >= nodes) return;
+    const ulong mask = node_mask[i];
+    const uint n = popcount(mask);
+    const KdBox box = kd_load_box(node_box, i);
+    const float area = kd_box_area(box);
+    split_flag[i] = 0;
+    split_axis[i] = KDRAY_LEAF_AXIS;
+    if (n == 0 || node_depth[i] >= max_depth || !(area > 0.0f)) return;
+
+    const float inv_area = 1.0f / area;
+    const float3 extent = box.hi - box.lo;
+    const uint start = root_ref_start[node_root[i]];
+    float best_cost = cost_intersection * (float)n;
+    uint best_axis = KDRAY_LEAF_AXIS, best_candidate = 0;
+    float best_pos = 0.0f;
+    for (ulong rest = mask; rest != 0; rest &= rest - 1) {
+        const uint j = (uint)popcount((rest & (0ul - rest)) - 1ul); /* lowest set bit */
+        const uint ref = start + j;
+        for (uint k = 0; k < 6; ++k) {
+            const uint axis = k / 2;
+            const float pos = ref_box[(size_t)ref * 6 + (k % 2) * 3 + axis];
+            const float lo = kd_axis_of(box.lo, axis), hi = kd_axis_of(box.hi, axis);
+            if (!(pos > lo && pos < hi)) continue;
+            const uint c = ref * 6 + k;
+            const uint n_below = popcount(mask & below_mask[c]);
+            const uint n_above = popcount(mask & above_mask[c]);
+            /* Child areas from the shared cross-section and the perimeter of the other axes. */
+            const float e0 = kd_axis_of(extent, (axis + 1) % 3);
+            const float e1 = kd_axis_of(extent, (axis + 2) % 3);
+            const float cross = e0 * e1, ring = e0 + e1;
+            const float area_below = 2.0f * (cross + (pos - lo) * ring);
+            const float area_above = 2.0f * (cross + (hi - pos) * ring);
+            float cost = cost_traversal +
+                         cost_intersection * inv_area *
+                             ((float)n_below * area_below + (float)n_above * area_above);
+            if (n_below == 0 || n_above == 0) cost *= 1.0f - empty_bonus;
+            if (cost < best_cost) {
+                best_cost = cost, best_axis = axis, best_pos = pos, best_candidate = c;
+            }
+        }
+    }
+    if (best_axis == KDRAY_LEAF_AXIS) return;
+    split_flag[i] = 1;
+    split_axis[i] = best_axis;
+    split_pos[i] = best_pos;
+    child_mask[2 * i] = mask & below_mask[best_candidate];
+    child_mask[2 * i + 1] = mask & above_mask[best_candidate];
+}
+
+/* Node records of a small level and its children, the next level's nodes: split node i's
+ * children are next-level nodes 2*rank(i) and 2*rank(i)+1 and get node ids from node_base. */
+__kernel void kd_emit_small_children(uint nodes, __global const float* node_box,
+                                     __global const ulong* node_mask,
+                                     __global const uint* node_root,
+                                     __global const uint* node_depth,
+                                     __global const uint* node_id, __global const uint* split_axis,
+                                     __global const float* split_pos,
+                                     __global const ulong* child_mask,
+                                     __global const uint* split_rank, uint node_base,
+                                     __global KdBuildNode* records, __global float* next_box,
+                                     __global ulong* next_mask, __global uint* next_root,
+                                     __global uint* next_depth, __global uint* next_node_id) {
+    const uint i = get_global_id(0);
+    if (i >= nodes) return;
+    const ulong mask = node_mask[i];
+    const uint axis = split_axis[i];
+    if (axis == KDRAY_LEAF_AXIS) {
+        records[node_id[i]] = kd_build_leaf(popcount(mask), node_root[i], mask);
+        return;
+    }
+    const KdBox box = kd_load_box(node_box, i);
+    const float split = split_pos[i];
+    const uint first = 2 * split_rank[i];
+    for (uint side = 0; side < 2; ++side) {
+        const uint j = first + side;
+        kd_store_box(next_box, j, kd_child_box(box, axis, split, side));
+        next_mask[j] = child_mask[2 * i + side];
+        next_root[j] = node_root[i];
+        next_depth[j] = node_depth[i] + 1;
+        next_node_id[j] = node_base + j;
+    }
+    records[node_id[i]] = kd_build_inner(axis, split, node_base + first, node_base + first + 1);
+}

@@ -1,0 +1,490 @@
+// opencl_builder.cpp — the host side of the OpenCL kd-tree builder (Zhou et al. 2008): it holds the
+// build's device arrays, launches the kernels of build_large.cl, build_small.cl and
+// build_output.cl stage by stage, and reads back only the few counts that size the next launch
+// (one read per level). The algorithm itself lives in the kernels; the comments there cite the
+// paper's sections.
+#include "cl/opencl_builder.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cl/cl_error.h"
+#include "cl/device_memory.h"
+#include "cl/launch.h"
+#include "cl/primitives.h"
+#include "cl/program_cache.h"
+#include "core/error.h"
+
+namespace kdray {
+namespace {
+
+// Segments of the large stage's per-child slot arrays (build_large.cl passes through these
+// numbers as -D defines, so this enum is their one definition).
+enum SlotKind : unsigned {
+    kSlotLarge,        // the child stays a large node (1/0)
+    kSlotLargeRefs,    // ... its reference count
+    kSlotLargeChunks,  // ... its reduction chunks
+    kSlotSmall,        // the child becomes a small root (1/0)
+    kSlotSmallRefs,    // ... its reference count
+    kSlotLeafRefs,     // references of a node that becomes a leaf (in its slot 2i)
+    kSlotChild,        // the child exists (it gets a node id)
+    kSlotKinds
+};
+
+// A large-stage level holding more references than this many per triangle splits no further: its
+// nodes become leaves. Real scenes stay well below it (about 1.2 to 2 in the large stage); it
+// bounds memory on pathological input where every median plane cuts most triangles.
+constexpr std::size_t kReferenceBudgetPerTriangle = 4;
+
+std::string build_defines() {
+    static const char* names[kSlotKinds] = {"LARGE",      "LARGE_REFS", "LARGE_CHUNKS", "SMALL",
+                                            "SMALL_REFS", "LEAF_REFS",  "CHILD"};
+    std::string defines = primitives_defines();
+    for (unsigned k = 0; k < kSlotKinds; ++k)
+        defines += " -DKDRAY_SLOT_" + std::string(names[k]) + "=" + std::to_string(k) + "u";
+    return defines + " -DKDRAY_SLOT_KINDS=" + std::to_string(unsigned(kSlotKinds)) + "u";
+}
+
+struct Kernels {
+    cl::Kernel compute_aabbs, split_large, classify, count_large, emit_large, distribute;
+    cl::Kernel split_masks, split_small, emit_small;
+    cl::Kernel size_subtrees, place_subtrees, write_nodes;
+
+    explicit Kernels(const ClDevice& device) {
+        const std::string defines = build_defines();
+        const cl::Program large = cached_program(device, "build_large.cl", defines);
+        const cl::Program small = cached_program(device, "build_small.cl", defines);
+        const cl::Program output = cached_program(device, "build_output.cl", defines);
+        compute_aabbs = make_kernel(large, "kd_compute_aabbs");
+        split_large = make_kernel(large, "kd_split_large_nodes");
+        classify = make_kernel(large, "kd_classify_references");
+        count_large = make_kernel(large, "kd_count_large_children");
+        emit_large = make_kernel(large, "kd_emit_large_children");
+        distribute = make_kernel(large, "kd_distribute_references");
+        split_masks = make_kernel(small, "kd_compute_split_masks");
+        split_small = make_kernel(small, "kd_split_small_nodes");
+        emit_small = make_kernel(small, "kd_emit_small_children");
+        size_subtrees = make_kernel(output, "kd_size_subtrees");
+        place_subtrees = make_kernel(output, "kd_place_subtrees");
+        write_nodes = make_kernel(output, "kd_write_nodes");
+    }
+};
+
+/// Per-stage wall times. Each lap waits for the queue, so a stage's time is its own kernels'.
+class StageClock {
+  public:
+    StageClock(cl::CommandQueue& queue, BuildReport* report) : queue_(queue), report_(report) {}
+    void lap(const char* stage) {
+        with_cl_context(std::string("finishing build stage ") + stage, [&] { queue_.finish(); });
+        const auto now = std::chrono::steady_clock::now();
+        if (report_)
+            report_->timings_ms.emplace_back(
+                stage, std::chrono::duration<double, std::milli>(now - last_).count());
+        last_ = now;
+    }
+
+  private:
+    cl::CommandQueue& queue_;
+    BuildReport* report_;
+    std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+/// The nodes of one small-stage level (structure of arrays, one entry per node).
+struct SmallLevel {
+    DeviceArray box, mask, root, depth, id;
+};
+
+/// Everything one build holds on the device between its stages.
+struct Build {
+    Build(ClDevice& d, const BuildParams& p, std::size_t triangle_count)
+        : device(d),
+          queue(d.queue()),
+          memory(d),
+          primitives(d),
+          kernels(d),
+          params(p),
+          triangles(static_cast<cl_uint>(triangle_count)) {}
+
+    ClDevice& device;
+    cl::CommandQueue& queue;
+    DeviceMemory memory;
+    ClPrimitives primitives;
+    Kernels kernels;
+    BuildParams params;
+    cl_uint triangles;
+
+    DeviceArray triangle_data, triangle_boxes, triangle_ids;
+    // Node records by id, and the id ranges in creation order (children after their parents).
+    DeviceArray records;
+    cl_uint node_count = 0;
+    std::vector<std::pair<cl_uint, cl_uint>> batches;
+    // Leaves of the large stage keep their triangles here.
+    DeviceArray leaf_store;
+    cl_uint leaf_refs = 0;
+    // Small roots: their reference lists (triangle, clipped box, root) and their ranges.
+    DeviceArray small_ref_tri, small_ref_box, small_ref_root, root_ref_start, root_ref_count;
+    cl_uint small_refs = 0, small_roots = 0;
+    // The small stage's first level: one node per small root, in root order.
+    SmallLevel small_first;
+    int large_levels = 0, small_levels = 0;
+
+    DeviceArray allocate(std::size_t bytes, const std::string& what) {
+        return memory.allocate(bytes, what);
+    }
+    void add_batch(cl_uint count) {
+        if (count == 0) return;
+        batches.emplace_back(node_count, count);
+        node_count += count;
+    }
+    void reserve_records(std::size_t nodes) {
+        if (nodes > KDRAY_MAX_OFFSET)
+            throw Error("OpenCL kd-tree build: " + std::to_string(nodes) +
+                        " nodes exceed the layout's limit of " + std::to_string(KDRAY_MAX_OFFSET));
+        memory.reserve(records, nodes * sizeof(KdBuildNode), node_count * sizeof(KdBuildNode),
+                       "kd-tree node records");
+    }
+    void reserve_small_roots(std::size_t roots, std::size_t refs) {
+        const std::size_t r = small_roots, n = small_refs;
+        memory.reserve(small_ref_tri, refs * 4, n * 4, "small root triangle ids");
+        memory.reserve(small_ref_box, refs * 24, n * 24, "small root triangle boxes");
+        memory.reserve(small_ref_root, refs * 4, n * 4, "small root of each reference");
+        memory.reserve(root_ref_start, roots * 4, r * 4, "small root reference starts");
+        memory.reserve(root_ref_count, roots * 4, r * 4, "small root reference counts");
+        memory.reserve(small_first.box, roots * 24, r * 24, "small node boxes");
+        memory.reserve(small_first.mask, roots * 8, r * 8, "small node masks");
+        memory.reserve(small_first.root, roots * 4, r * 4, "small node roots");
+        memory.reserve(small_first.depth, roots * 4, r * 4, "small node depths");
+        memory.reserve(small_first.id, roots * 4, r * 4, "small node ids");
+    }
+};
+
+template <class T>
+void write_array(cl::CommandQueue& queue, const DeviceArray& array, const std::vector<T>& values) {
+    with_cl_context("uploading build data", [&] {
+        queue.enqueueWriteBuffer(array.buffer(), CL_TRUE, 0, values.size() * sizeof(T),
+                                 values.data());
+    });
+}
+
+cl_uint read_uint(cl::CommandQueue& queue, const DeviceArray& array, std::size_t index) {
+    cl_uint value = 0;
+    with_cl_context("reading a build count", [&] {
+        queue.enqueueReadBuffer(array.buffer(), CL_TRUE, index * sizeof(cl_uint), sizeof(value),
+                                &value);
+    });
+    return value;
+}
+
+std::vector<float> box_floats(const Aabb& b) {
+    return {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
+}
+
+cl_uint checked_u32(std::uint64_t value, const char* what) {
+    if (value > 0xFFFFFFFFull)
+        throw Error(std::string("OpenCL kd-tree build: ") + what + " overflow 32 bits (" +
+                    std::to_string(value) + ")");
+    return static_cast<cl_uint>(value);
+}
+
+/* Upload and triangle bounding boxes (§4, first step). */
+void compute_triangle_boxes(Build& b, const Scene& scene, StageClock& clock) {
+    const std::size_t n = b.triangles;
+    b.triangle_data = b.allocate(scene.triangles.size() * sizeof(float), "triangles");
+    write_array(b.queue, b.triangle_data, scene.triangles);
+    clock.lap("upload");
+    b.triangle_boxes = b.allocate(n * 24, "triangle boxes");
+    b.triangle_ids = b.allocate(n * 4, "triangle references");
+    enqueue_kernel(b.queue, b.kernels.compute_aabbs, n, b.triangle_data.buffer(), cl_uint(n),
+                   b.triangle_boxes.buffer(), b.triangle_ids.buffer());
+    clock.lap("aabbs");
+}
+
+/* A scene of at most T triangles is a small root from the start: the large stage has nothing to
+ * do, and the root's references are the triangles' own boxes. */
+void make_root_small(Build& b, const Aabb& bounds) {
+    const cl_uint n = b.triangles;
+    b.reserve_small_roots(1, n);
+    with_cl_context("setting up the small root", [&] {
+        b.queue.enqueueCopyBuffer(b.triangle_ids.buffer(), b.small_ref_tri.buffer(), 0, 0, n * 4);
+        b.queue.enqueueCopyBuffer(b.triangle_boxes.buffer(), b.small_ref_box.buffer(), 0, 0,
+                                  n * 24);
+        b.queue.enqueueFillBuffer(b.small_ref_root.buffer(), cl_uint(0), 0, n * 4);
+    });
+    write_array(b.queue, b.root_ref_start, std::vector<cl_uint>{0});
+    write_array(b.queue, b.root_ref_count, std::vector<cl_uint>{n});
+    write_array(b.queue, b.small_first.box, box_floats(bounds));
+    write_array(b.queue, b.small_first.mask,
+                std::vector<cl_ulong>{n >= 64 ? ~cl_ulong(0) : (cl_ulong(1) << n) - 1});
+    write_array(b.queue, b.small_first.root, std::vector<cl_uint>{0});
+    write_array(b.queue, b.small_first.depth, std::vector<cl_uint>{0});
+    write_array(b.queue, b.small_first.id, std::vector<cl_uint>{0});
+    b.small_roots = 1;
+    b.small_refs = n;
+}
+
+/* Large-node stage (§4.1): one iteration per tree level over every active large node. */
+void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint threshold) {
+    const cl_uint n = b.triangles;
+    if (n <= threshold) {
+        make_root_small(b, bounds);
+        return;
+    }
+    cl::CommandQueue& q = b.queue;
+    Kernels& k = b.kernels;
+    // Level 0: the root, holding every triangle.
+    cl_uint nodes = 1, refs = n, chunks = cl_uint((n + kReduceChunk - 1) / kReduceChunk);
+    DeviceArray node_box = b.allocate(24, "large node boxes");
+    DeviceArray node_start = b.allocate(4, "large node reference starts");
+    DeviceArray node_count = b.allocate(4, "large node reference counts");
+    DeviceArray node_chunk = b.allocate(8, "large node chunk starts");
+    DeviceArray node_id = b.allocate(4, "large node ids");
+    write_array(q, node_box, box_floats(bounds));
+    write_array(q, node_start, std::vector<cl_uint>{0});
+    write_array(q, node_count, std::vector<cl_uint>{n});
+    write_array(q, node_chunk, std::vector<cl_uint>{0, chunks});
+    write_array(q, node_id, std::vector<cl_uint>{0});
+    DeviceArray ref_tri = std::move(b.triangle_ids), ref_box = std::move(b.triangle_boxes);
+    const std::size_t budget = kReferenceBudgetPerTriangle * std::size_t(n);
+
+    for (cl_uint depth = 0; nodes > 0; ++depth) {
+        ++b.large_levels;
+        const cl_uint force_leaf = depth >= cl_uint(max_depth) || refs > budget;
+        const cl_uint slots = 2 * nodes;
+
+        /* Node bounds: segmented reduction of the reference boxes, then the split decision. */
+        DeviceArray tight = b.allocate(std::size_t(nodes) * 24, "large node tight boxes");
+        if (!force_leaf) {
+            DeviceArray chunk_boxes = b.allocate(std::size_t(chunks) * 24, "reduction chunks");
+            b.primitives.reduce_box_segments(ref_box.buffer(), node_start.buffer(),
+                                             node_count.buffer(), node_chunk.buffer(), nodes,
+                                             chunks, chunk_boxes.buffer(), tight.buffer());
+        }
+        DeviceArray split_axis = b.allocate(nodes * 4, "large split axes");
+        DeviceArray split_pos = b.allocate(nodes * 4, "large split positions");
+        DeviceArray planar = b.allocate(nodes * 4, "large split planar sides");
+        enqueue_kernel(q, k.split_large, nodes, nodes, node_box.buffer(), tight.buffer(),
+                       force_leaf, cl_float(b.params.empty_space_ratio), split_axis.buffer(),
+                       split_pos.buffer(), planar.buffer());
+
+        /* Classify references, then rank them within their children by one scan. */
+        DeviceArray rank = b.allocate((2 * std::size_t(refs) + 1) * 4, "reference ranks");
+        enqueue_kernel(q, k.classify, refs, refs, ref_tri.buffer(), ref_box.buffer(),
+                       b.triangle_data.buffer(), nodes, node_start.buffer(), node_box.buffer(),
+                       split_axis.buffer(), split_pos.buffer(), planar.buffer(), rank.buffer());
+        b.primitives.exclusive_scan(rank.buffer(), rank.buffer(), 2 * std::size_t(refs));
+
+        /* Child sizes and kinds, ranked by one scan over all slot kinds. */
+        const std::size_t slot_values = std::size_t(kSlotKinds) * slots;
+        DeviceArray slot = b.allocate((slot_values + 1) * 4, "child slots");
+        enqueue_kernel(q, k.count_large, nodes, nodes, node_start.buffer(), node_count.buffer(),
+                       split_axis.buffer(), rank.buffer(), refs, threshold, slot.buffer());
+        b.primitives.exclusive_scan(slot.buffer(), slot.buffer(), slot_values);
+
+        /* The level's one read-back: the totals of every slot kind. */
+        std::array<cl_uint, kSlotKinds + 1> at{};
+        with_cl_context("reading the large level's totals", [&] {
+            for (unsigned kind = 0; kind <= kSlotKinds; ++kind)
+                q.enqueueReadBuffer(slot.buffer(), CL_FALSE,
+                                    std::size_t(kind) * slots * sizeof(cl_uint), sizeof(cl_uint),
+                                    &at[kind]);
+            q.finish();
+        });
+        auto total = [&](SlotKind kind) { return at[kind + 1] - at[kind]; };
+        const cl_uint next_nodes = total(kSlotLarge), next_refs = total(kSlotLargeRefs);
+        const cl_uint next_chunks = total(kSlotLargeChunks), new_roots = total(kSlotSmall);
+        const cl_uint new_small_refs = total(kSlotSmallRefs), new_leaf_refs = total(kSlotLeafRefs);
+        const cl_uint new_nodes = total(kSlotChild);
+
+        /* Room for what this level creates, then write it. */
+        b.reserve_records(std::size_t(b.node_count) + new_nodes);
+        b.reserve_small_roots(
+            checked_u32(std::uint64_t(b.small_roots) + new_roots, "small roots"),
+            checked_u32(std::uint64_t(b.small_refs) + new_small_refs, "small references"));
+        const cl_uint leaf_total =
+            checked_u32(std::uint64_t(b.leaf_refs) + new_leaf_refs, "leaf references");
+        b.memory.reserve(b.leaf_store, std::size_t(leaf_total) * 4, std::size_t(b.leaf_refs) * 4,
+                         "leaf references");
+        DeviceArray next_box = b.allocate(std::size_t(next_nodes) * 24, "large node boxes");
+        DeviceArray next_start = b.allocate(next_nodes * 4, "large node reference starts");
+        DeviceArray next_count = b.allocate(next_nodes * 4, "large node reference counts");
+        DeviceArray next_chunk = b.allocate((next_nodes + 1) * 4, "large node chunk starts");
+        DeviceArray next_id = b.allocate(next_nodes * 4, "large node ids");
+        DeviceArray next_tri = b.allocate(std::size_t(next_refs) * 4, "triangle references");
+        DeviceArray next_ref_box = b.allocate(std::size_t(next_refs) * 24, "reference boxes");
+        enqueue_kernel(
+            q, k.emit_large, nodes, nodes, node_box.buffer(), node_count.buffer(), node_id.buffer(),
+            split_axis.buffer(), split_pos.buffer(), slot.buffer(), b.node_count, b.small_roots,
+            b.small_refs, b.leaf_refs, depth + 1, b.records.buffer(), next_box.buffer(),
+            next_start.buffer(), next_count.buffer(), next_chunk.buffer(), next_id.buffer(),
+            b.root_ref_start.buffer(), b.root_ref_count.buffer(), b.small_first.box.buffer(),
+            b.small_first.mask.buffer(), b.small_first.root.buffer(), b.small_first.id.buffer(),
+            b.small_first.depth.buffer());
+        enqueue_kernel(q, k.distribute, refs, refs, ref_tri.buffer(), ref_box.buffer(),
+                       b.triangle_data.buffer(), nodes, node_start.buffer(), node_box.buffer(),
+                       split_axis.buffer(), split_pos.buffer(), rank.buffer(), slot.buffer(),
+                       b.small_roots, b.small_refs, b.leaf_refs, next_tri.buffer(),
+                       next_ref_box.buffer(), b.small_ref_tri.buffer(), b.small_ref_box.buffer(),
+                       b.small_ref_root.buffer(), b.leaf_store.buffer());
+        b.add_batch(new_nodes);
+        b.small_roots += new_roots;
+        b.small_refs += new_small_refs;
+        b.leaf_refs = leaf_total;
+
+        nodes = next_nodes, refs = next_refs, chunks = next_chunks;
+        node_box = std::move(next_box), node_start = std::move(next_start);
+        node_count = std::move(next_count), node_chunk = std::move(next_chunk);
+        node_id = std::move(next_id), ref_tri = std::move(next_tri);
+        ref_box = std::move(next_ref_box);
+    }
+}
+
+/* Small-node stage (§4.2): split-candidate masks once, then one SAH launch per level. */
+void run_small_stage(Build& b, int max_depth) {
+    if (b.small_roots == 0) return;
+    cl::CommandQueue& q = b.queue;
+    Kernels& k = b.kernels;
+    const std::size_t candidates = 6 * std::size_t(b.small_refs);
+    checked_u32(candidates, "split candidates");
+    DeviceArray below = b.allocate(candidates * 8, "candidate below masks");
+    DeviceArray above = b.allocate(candidates * 8, "candidate above masks");
+    enqueue_kernel(q, k.split_masks, candidates, cl_uint(candidates), b.small_ref_box.buffer(),
+                   b.small_ref_root.buffer(), b.root_ref_start.buffer(), b.root_ref_count.buffer(),
+                   below.buffer(), above.buffer());
+
+    SmallLevel level = std::move(b.small_first);
+    cl_uint nodes = b.small_roots;
+    while (nodes > 0) {
+        ++b.small_levels;
+        DeviceArray split_axis = b.allocate(nodes * 4, "small split axes");
+        DeviceArray split_pos = b.allocate(nodes * 4, "small split positions");
+        DeviceArray child_mask = b.allocate(std::size_t(nodes) * 16, "small child masks");
+        DeviceArray split_rank = b.allocate((std::size_t(nodes) + 1) * 4, "small split ranks");
+        enqueue_kernel(q, k.split_small, nodes, nodes, level.box.buffer(), level.mask.buffer(),
+                       level.root.buffer(), level.depth.buffer(), b.small_ref_box.buffer(),
+                       b.root_ref_start.buffer(), below.buffer(), above.buffer(),
+                       cl_float(b.params.costs.traversal), cl_float(b.params.costs.intersection),
+                       cl_float(b.params.empty_bonus), cl_uint(max_depth), split_axis.buffer(),
+                       split_pos.buffer(), child_mask.buffer(), split_rank.buffer());
+        b.primitives.exclusive_scan(split_rank.buffer(), split_rank.buffer(), nodes);
+        const cl_uint next_nodes = 2 * read_uint(q, split_rank, nodes);  // the level's read-back
+
+        b.reserve_records(std::size_t(b.node_count) + next_nodes);
+        SmallLevel next{b.allocate(std::size_t(next_nodes) * 24, "small node boxes"),
+                        b.allocate(std::size_t(next_nodes) * 8, "small node masks"),
+                        b.allocate(next_nodes * 4, "small node roots"),
+                        b.allocate(next_nodes * 4, "small node depths"),
+                        b.allocate(next_nodes * 4, "small node ids")};
+        enqueue_kernel(q, k.emit_small, nodes, nodes, level.box.buffer(), level.mask.buffer(),
+                       level.root.buffer(), level.depth.buffer(), level.id.buffer(),
+                       split_axis.buffer(), split_pos.buffer(), child_mask.buffer(),
+                       split_rank.buffer(), b.node_count, b.records.buffer(), next.box.buffer(),
+                       next.mask.buffer(), next.root.buffer(), next.depth.buffer(),
+                       next.id.buffer());
+        b.add_batch(next_nodes);
+        level = std::move(next);
+        nodes = next_nodes;
+    }
+}
+
+/* Output stage (§4.3): subtree sizes bottom-up, preorder positions top-down, then the nodes. */
+DeviceArray write_preorder(Build& b, DeviceArray& leaf_indices, cl_uint& leaf_index_count) {
+    cl::CommandQueue& q = b.queue;
+    Kernels& k = b.kernels;
+    const std::size_t count = b.node_count;
+    DeviceArray subtree_nodes = b.allocate(count * 4, "subtree node counts");
+    DeviceArray subtree_refs = b.allocate(count * 4, "subtree reference counts");
+    DeviceArray position = b.allocate(count * 4, "preorder positions");
+    DeviceArray leaf_position = b.allocate(count * 4, "leaf index positions");
+    for (auto it = b.batches.rbegin(); it != b.batches.rend(); ++it)
+        enqueue_kernel(q, k.size_subtrees, it->second, it->first, it->second, b.records.buffer(),
+                       subtree_nodes.buffer(), subtree_refs.buffer());
+    write_array(q, position, std::vector<cl_uint>{0});
+    write_array(q, leaf_position, std::vector<cl_uint>{0});
+    for (const auto& [begin, n] : b.batches)
+        enqueue_kernel(q, k.place_subtrees, n, begin, n, b.records.buffer(), subtree_nodes.buffer(),
+                       subtree_refs.buffer(), position.buffer(), leaf_position.buffer());
+    leaf_index_count = read_uint(q, subtree_refs, 0);
+    if (leaf_index_count > KDRAY_MAX_OFFSET)
+        throw Error("OpenCL kd-tree build: " + std::to_string(leaf_index_count) +
+                    " leaf references exceed the layout's limit of " +
+                    std::to_string(KDRAY_MAX_OFFSET));
+    DeviceArray nodes = b.allocate(count * sizeof(KdNode), "kd-tree nodes");
+    leaf_indices = b.allocate(std::size_t(leaf_index_count) * 4, "kd-tree leaf indices");
+    enqueue_kernel(q, k.write_nodes, count, cl_uint(count), b.records.buffer(), position.buffer(),
+                   leaf_position.buffer(), b.leaf_store.buffer(), b.small_ref_tri.buffer(),
+                   b.root_ref_start.buffer(), nodes.buffer(), leaf_indices.buffer());
+    return nodes;
+}
+
+}  // namespace
+
+KdTree build_opencl(ClDevice& device, const Scene& scene, const BuildParams& params,
+                    BuildReport* report) {
+    const auto start = std::chrono::steady_clock::now();
+    KdTree tree;
+    tree.bounds = scene.bounds();
+    tree.params = params;
+    tree.params.max_depth = std::clamp(params.max_depth, 0, KDRAY_MAX_DEPTH);
+    tree.params.large_node_threshold = std::clamp(params.large_node_threshold, 1, 64);
+    tree.builder = "opencl";
+    if (report) *report = BuildReport{};
+    const std::size_t n = scene.triangle_count();
+    if (n > KDRAY_MAX_OFFSET)
+        throw Error("OpenCL kd-tree build: " + std::to_string(n) +
+                    " triangles exceed the layout's limit of " + std::to_string(KDRAY_MAX_OFFSET));
+    if (n == 0) {
+        // Nothing to launch: OpenCL forbids empty kernels and buffers.
+        tree.nodes = {kd_make_leaf(0, 0)};
+        if (report)
+            for (const char* stage :
+                 {"upload", "aabbs", "large_nodes", "small_nodes", "output", "download"})
+                report->timings_ms.emplace_back(stage, 0.0);
+        return tree;
+    }
+
+    Build b(device, tree.params, n);
+    StageClock clock(b.queue, report);
+    b.reserve_records(1);
+    b.add_batch(1);  // the root, id 0
+    b.reserve_small_roots(1, 1);
+    b.memory.reserve(b.leaf_store, 4, 0, "leaf references");
+    const cl_uint threshold = cl_uint(tree.params.large_node_threshold);
+
+    compute_triangle_boxes(b, scene, clock);
+    run_large_stage(b, tree.bounds, tree.params.max_depth, threshold);
+    clock.lap("large_nodes");
+    run_small_stage(b, tree.params.max_depth);
+    clock.lap("small_nodes");
+    DeviceArray leaf_indices;
+    cl_uint leaf_index_count = 0;
+    DeviceArray nodes = write_preorder(b, leaf_indices, leaf_index_count);
+    clock.lap("output");
+
+    tree.nodes.resize(b.node_count);
+    tree.leaf_indices.resize(leaf_index_count);
+    with_cl_context("downloading the kd-tree", [&] {
+        b.queue.enqueueReadBuffer(nodes.buffer(), CL_TRUE, 0, tree.nodes.size() * sizeof(KdNode),
+                                  tree.nodes.data());
+        if (leaf_index_count)
+            b.queue.enqueueReadBuffer(leaf_indices.buffer(), CL_TRUE, 0,
+                                      tree.leaf_indices.size() * sizeof(kd_u32),
+                                      tree.leaf_indices.data());
+    });
+    clock.lap("download");
+    if (report) {
+        report->build_ms =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                .count();
+        report->large_node_levels = b.large_levels;
+        report->small_node_levels = b.small_levels;
+        report->device_bytes = b.memory.peak_bytes();
+    }
+    return tree;
+}
+
+}  // namespace kdray

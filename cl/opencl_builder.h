@@ -1,0 +1,24 @@
+// opencl_builder.h — kd-tree construction on an OpenCL device with the algorithm of Zhou, Hou,
+// Wang and Guo, "Real-time kd-tree construction on graphics hardware" (ACM TOG 27(5), 2008):
+// a large-node stage (empty-space cutting and spatial-median splits of every large node of a
+// level at once), a small-node stage (exact SAH with 64-bit triangle masks) and a preorder output
+// stage, all on the device; the host only launches kernels and reads back the counts that size
+// the next launch.
+#pragma once
+
+#include "cl/device.h"
+#include "core/kd_tree.h"
+#include "core/scene.h"
+
+namespace kdray {
+
+/// Builds the kd-tree of `scene` on `device`. The tree's bounds are scene.bounds(), its builder
+/// "opencl", its params a copy of `params` (max_depth is clamped to KDRAY_MAX_DEPTH and
+/// large_node_threshold to [1, 64], the width of the small stage's masks). When `report` is given
+/// it receives the per-stage times (upload, aabbs, large_nodes, small_nodes, output, download),
+/// build_ms, the level counts of both stages and the peak device memory. Throws Error on any
+/// OpenCL failure, naming the step. An empty scene gives a single empty leaf.
+KdTree build_opencl(ClDevice& device, const Scene& scene, const BuildParams& params = {},
+                    BuildReport* report = nullptr);
+
+}  // namespace kdray
