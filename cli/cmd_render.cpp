@@ -6,11 +6,14 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <iostream>
+#include <utility>
 
 #include "cl/opencl_renderer.h"
 #include "cli/commands.h"
 #include "cli/device_session.h"
+#include "cli/frame_selection.h"
 #include "cli/inputs.h"
 #include "cli/report.h"
 #include "cli/tree_builder.h"
@@ -64,15 +67,31 @@ int run_render(const RenderCommand& command) {
     create_output_dir(out_dir);
     const bool progress = !command.quiet && ::isatty(STDERR_FILENO);
 
+    const std::vector<std::size_t> selected =
+        select_frames(inputs.size(), command.frames, command.shard);
+    if (selected.empty())
+        throw UsageError("--frames/--shard select no frame of the " +
+                         std::to_string(inputs.size()) + " inputs");
+
+    // The next frame's OBJ loads on another thread while this one builds and traces.
+    auto load_async = [&](std::size_t frame) {
+        return std::async(std::launch::async, [path = inputs[frame]] {
+            auto start = Clock::now();
+            Scene scene = load_obj(path);
+            return std::make_pair(std::move(scene), ms_since(start));
+        });
+    };
     nlohmann::json frames = nlohmann::json::array();
     std::vector<double> frame_times;
-    Camera framed;  // without a camera in the render file: frame the first frame's scene
+    Camera framed;  // without a camera in the render file: frame the first rendered scene
     auto run_start = Clock::now();
-    for (std::size_t i = 0; i < inputs.size(); ++i) {
+    auto next_scene = load_async(selected[0]);
+    for (std::size_t k = 0; k < selected.size(); ++k) {
+        const std::size_t i = selected[k];
         auto frame_start = Clock::now();
-        Scene scene = load_obj(inputs[i]);
-        double load_ms = ms_since(frame_start);
-        if (i == 0) framed = frame_bounds(scene.bounds());
+        auto [scene, load_ms] = next_scene.get();
+        if (k + 1 < selected.size()) next_scene = load_async(selected[k + 1]);
+        if (k == 0) framed = frame_bounds(scene.bounds());
         Camera camera = settings.camera_given ? settings.camera_at(int(i)) : framed;
 
         BuiltTree built = builder.build(scene);
@@ -117,7 +136,7 @@ int run_render(const RenderCommand& command) {
         frames.push_back(frame);
         for (const std::string& warning : scene.warnings)
             std::cerr << "kdray: warning: " << warning << "\n";
-        if (progress) show_progress(i + 1, inputs.size(), ms_since(run_start));
+        if (progress) show_progress(k + 1, selected.size(), ms_since(run_start));
     }
 
     double total_ms = 0, worst_ms = 0;

@@ -1,5 +1,6 @@
 // `kdray stats [PATH...]`: statistics of OBJ scenes (built with the chosen builder), tree files
 // or render output folders; with no PATH, the OpenCL devices kdray can use and its defaults.
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -28,7 +29,7 @@ nlohmann::json defaults_json(const BuilderOptions& o) {
             {"max_depth", p.max_depth}};
 }
 
-nlohmann::json render_folder_json(const std::filesystem::path& dir) {
+nlohmann::json read_render_stats(const std::filesystem::path& dir) {
     std::filesystem::path file = dir / "stats.json";
     std::ifstream in(file);
     if (!in) throw Error(dir.string() + ": not a render output folder (no stats.json)");
@@ -38,9 +39,42 @@ nlohmann::json render_folder_json(const std::filesystem::path& dir) {
     } catch (const nlohmann::json::exception& e) {
         throw Error(file.string() + ": malformed JSON: " + e.what());
     }
-    if (!stats.contains("summary") || !stats.contains("frames"))
+    if (!stats.contains("summary") || !stats.contains("frames") || !stats["frames"].is_array())
         throw Error(file.string() + ": not a kdray stats file (no summary or frames)");
-    nlohmann::json j = stats["summary"];
+    return stats;
+}
+
+/// Summary over the frames of one or more render folders (the shards of one animation).
+nlohmann::json summarise_frames(const std::vector<nlohmann::json>& runs) {
+    double total_ms = 0, worst_ms = 0, build_ms = 0, trace_ms = 0;
+    std::vector<std::size_t> numbers;
+    for (const nlohmann::json& run : runs)
+        for (const nlohmann::json& frame : run["frames"]) {
+            double ms = frame.value("frame_ms", 0.0);
+            total_ms += ms;
+            worst_ms = std::max(worst_ms, ms);
+            build_ms += frame.value("build_ms", 0.0);
+            trace_ms += frame.value("trace_ms", 0.0);
+            numbers.push_back(frame.value("frame", std::size_t(0)));
+        }
+    std::sort(numbers.begin(), numbers.end());
+    const double n = double(numbers.size());
+    const double mean_ms = n > 0 ? total_ms / n : 0.0;
+    nlohmann::json j = {{"frames", numbers.size()},
+                        {"mean_frame_ms", mean_ms},
+                        {"worst_frame_ms", worst_ms},
+                        {"mean_build_ms", n > 0 ? build_ms / n : 0.0},
+                        {"mean_trace_ms", n > 0 ? trace_ms / n : 0.0},
+                        {"frames_per_second", mean_ms > 0 ? 1000.0 / mean_ms : 0.0},
+                        {"frame_numbers", numbers}};
+    if (std::adjacent_find(numbers.begin(), numbers.end()) != numbers.end())
+        j["warning"] = "some frame numbers appear in more than one folder";
+    return j;
+}
+
+nlohmann::json render_folder_json(const std::filesystem::path& dir) {
+    nlohmann::json stats = read_render_stats(dir);
+    nlohmann::json j = summarise_frames({stats});
     j["folder"] = dir.string();
     j["builder"] = stats.value("builder", "");
     j["tracer"] = stats.value("tracer", "");
@@ -74,11 +108,17 @@ int run_stats(const StatsCommand& command) {
         nlohmann::json items = nlohmann::json::array();
         for (const std::string& path : command.paths) items.push_back(path_json(path, builder));
         out = command.paths.size() == 1 ? items[0] : nlohmann::json{{"items", items}};
+        // Several render folders are the shards of one animation: one summary over them all.
+        std::vector<nlohmann::json> runs;
+        for (const std::string& path : command.paths)
+            if (std::filesystem::is_directory(path)) runs.push_back(read_render_stats(path));
+        if (runs.size() > 1) out["combined"] = summarise_frames(runs);
     }
     if (command.json) {
         std::cout << out.dump(2) << "\n";
     } else if (out.contains("items")) {
         for (const auto& item : out["items"]) print_table(std::cout, item);
+        if (out.contains("combined")) print_table(std::cout, {{"combined", out["combined"]}});
     } else {
         print_table(std::cout, out);
     }

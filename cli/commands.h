@@ -33,6 +33,8 @@ struct RenderCommand {
     std::string tracer = "reference";
     int threads = 0;
     bool quiet = false;
+    std::string frames;  // START:END[:STEP], END included
+    std::string shard;   // I/N
     BuilderOptions builder;
 };
 

@@ -80,6 +80,12 @@ int main(int argc, char** argv) {
         ->add_option("--threads", render.threads, "CPU threads for the reference tracer (0: all)")
         ->check(CLI::NonNegativeNumber);
     render_app->add_flag("-q,--quiet", render.quiet, "no progress line");
+    render_app->add_option("--frames", render.frames,
+                           "render only frames START:END[:STEP] (END included; frame numbers are "
+                           "positions in the naturally sorted inputs)");
+    render_app->add_option("--shard", render.shard,
+                           "render every N-th of the selected frames, starting at the I-th (I/N), "
+                           "e.g. --shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT");
     add_builder_options(*render_app, render.builder);
 
     StatsCommand stats;

@@ -135,6 +135,38 @@ TEST_CASE("kdray render writes images, AOVs that agree with brute force, and sta
     fs::remove_all(dir);
 }
 
+TEST_CASE("kdray render --frames and --shard pick frames by their number in the whole sequence") {
+    fs::path dir = fresh_temp_dir("cli-frames");
+    Scene scene = random_triangles(50, 13);
+    for (int f = 0; f < 12; ++f) write_obj(dir / "in" / ("f_" + std::to_string(f) + ".obj"), scene);
+    auto rendered = [&](const std::string& frames, const std::string& shard) {
+        fs::path out = dir / ("out" + frames + shard);
+        std::vector<std::string> args = {"render",    (dir / "in" / "f_*.obj").string(),
+                                         "-o",        out.string(),
+                                         "--builder", "reference",
+                                         "-q"};
+        if (!frames.empty()) args.insert(args.end(), {"--frames", frames});
+        if (!shard.empty()) args.insert(args.end(), {"--shard", shard});
+        CommandResult r = run_kdray(args);
+        REQUIRE_MESSAGE(r.status == 0, r.err);
+        std::vector<int> numbers;
+        const nlohmann::json stats = read_json(out / "stats.json");
+        for (const auto& f : stats["frames"]) numbers.push_back(f["frame"].get<int>());
+        return numbers;
+    };
+    CHECK(rendered("2:9:3", "") == std::vector<int>{2, 5, 8});
+    CHECK(rendered("10:", "") == std::vector<int>{10, 11});
+    CHECK(rendered("", "1/4") == std::vector<int>{1, 5, 9});
+    CHECK(rendered("0:7", "0/2") == std::vector<int>{0, 2, 4, 6});
+    CHECK(run_kdray({"render", (dir / "in" / "f_0.obj").string(), "-o", (dir / "x").string(),
+                     "--shard", "2/2"})
+              .status == 2);
+    CHECK(run_kdray({"render", (dir / "in" / "f_0.obj").string(), "-o", (dir / "x").string(),
+                     "--frames", "a:b"})
+              .status == 2);
+    fs::remove_all(dir);
+}
+
 TEST_CASE("bad input: one error line naming the file, exit status 1, no output written") {
     fs::path dir = fresh_temp_dir("cli-bad");
     fs::path out = dir / "out";
