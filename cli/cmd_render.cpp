@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <future>
@@ -52,26 +53,102 @@ void show_progress(std::size_t done, std::size_t total, double elapsed_ms) {
     std::fflush(stderr);
 }
 
+/// Everything a run shares between its frames.
+struct RenderRun {
+    const RenderCommand& command;
+    std::vector<std::string> inputs;
+    RenderSettings settings;
+    std::filesystem::path out_dir;
+    DeviceSession& session;
+    TreeBuilder& builder;
+    Camera framed;  // without a camera in the render file: frame the first rendered scene
+};
+
+/// Builds, traces and writes frame i; returns its stats.json record.
+nlohmann::json render_frame(RenderRun& run, std::size_t i, const Scene& scene, double load_ms,
+                            Clock::time_point frame_start) {
+    const RenderCommand& command = run.command;
+    Camera camera = run.settings.camera_given ? run.settings.camera_at(int(i)) : run.framed;
+    BuiltTree built = run.builder.build(scene);
+    auto trace_start = Clock::now();
+    RenderInputs render_inputs = prepare_render(scene, run.settings, camera, kd_u32(i));
+    FrameResult result = command.tracer == "opencl"
+                             ? render_opencl(run.session.device(), built.tree, scene, render_inputs)
+                             : render_reference(built.tree, scene, render_inputs, command.threads);
+    double trace_ms = ms_since(trace_start);
+
+    std::string stem = std::filesystem::path(run.inputs[i]).stem().string();
+    std::filesystem::path image_path = run.out_dir / (stem + "." + command.format);
+    write_image(image_path, result.image);
+    std::filesystem::path aov_path = run.out_dir / (stem + ".aov.exr");
+    if (command.aov) write_aov(aov_path, result.hits);
+
+    const RayTotals& rays = result.rays;
+    nlohmann::json frame = {
+        {"frame", i},
+        {"input", run.inputs[i]},
+        {"image", image_path.filename().string()},
+        {"scene", scene_json(scene)},
+        {"tree", tree_json(built, scene.triangle_count())},
+        {"tracer", command.tracer},
+        {"effects", render_inputs.effects.to_json()},
+        {"load_ms", load_ms},
+        {"build_ms", built.report.build_ms},
+        {"trace_ms", trace_ms},
+        {"frame_ms", ms_since(frame_start)},
+        {"rays",
+         {{"primary", rays.primary},
+          {"shadow", rays.shadow},
+          {"reflection", rays.reflection},
+          {"refraction", rays.refraction}}},
+        {"mrays_per_s", trace_ms > 0 ? double(rays.total()) / (trace_ms * 1e3) : 0.0}};
+    if (command.aov) frame["aov"] = aov_path.filename().string();
+    return frame;
+}
+
+nlohmann::json summary_json(const nlohmann::json& frames) {
+    double total_ms = 0, worst_ms = 0;
+    for (const nlohmann::json& f : frames) {
+        total_ms += f["frame_ms"].get<double>();
+        worst_ms = std::max(worst_ms, f["frame_ms"].get<double>());
+    }
+    double mean_ms = frames.empty() ? 0.0 : total_ms / double(frames.size());
+    return {{"frames", frames.size()},
+            {"mean_frame_ms", mean_ms},
+            {"worst_frame_ms", worst_ms},
+            {"frames_per_second", mean_ms > 0 ? 1000.0 / mean_ms : 0.0}};
+}
+
+/// Set by SIGINT/SIGTERM: the run stops after the frame in progress, whose files are written
+/// whole. A second signal ends the process at once; files are renamed into place only when
+/// complete, so even then no truncated image exists under its final name.
+volatile std::sig_atomic_t interrupted = 0;
+
+extern "C" void on_interrupt(int signal) {
+    interrupted = 1;
+    std::signal(signal, SIG_DFL);
+}
+
 }  // namespace
 
 int run_render(const RenderCommand& command) {
     // Check everything that can be checked before the first frame costs time.
     std::vector<std::string> inputs = expand_inputs(command.inputs);
-    RenderSettings settings;
-    if (!command.render_file.empty()) settings = load_render_file(command.render_file);
-    const std::filesystem::path out_dir = command.output_dir;
-    DeviceSession session(command.builder.device);
-    TreeBuilder builder(command.builder, session);
-    const bool opencl_tracer = command.tracer == "opencl";
-    if (opencl_tracer || command.builder.builder == "opencl") session.device();
-    create_output_dir(out_dir);
-    const bool progress = !command.quiet && ::isatty(STDERR_FILENO);
-
     const std::vector<std::size_t> selected =
         select_frames(inputs.size(), command.frames, command.shard);
     if (selected.empty())
         throw UsageError("--frames/--shard select no frame of the " +
                          std::to_string(inputs.size()) + " inputs");
+    RenderSettings settings;
+    if (!command.render_file.empty()) settings = load_render_file(command.render_file);
+    DeviceSession session(command.builder.device);
+    TreeBuilder builder(command.builder, session);
+    if (command.tracer == "opencl" || command.builder.builder == "opencl") session.device();
+    RenderRun run{command, inputs, settings, command.output_dir, session, builder, {}};
+    create_output_dir(run.out_dir);
+    const bool progress = !command.quiet && ::isatty(STDERR_FILENO);
+    std::signal(SIGINT, on_interrupt);
+    std::signal(SIGTERM, on_interrupt);
 
     // The next frame's OBJ loads on another thread while this one builds and traces.
     auto load_async = [&](std::size_t frame) {
@@ -81,67 +158,32 @@ int run_render(const RenderCommand& command) {
             return std::make_pair(std::move(scene), ms_since(start));
         });
     };
-    nlohmann::json frames = nlohmann::json::array();
-    std::vector<double> frame_times;
-    Camera framed;  // without a camera in the render file: frame the first rendered scene
+    nlohmann::json frames = nlohmann::json::array(), failures = nlohmann::json::array();
     auto run_start = Clock::now();
     auto next_scene = load_async(selected[0]);
-    for (std::size_t k = 0; k < selected.size(); ++k) {
-        const std::size_t i = selected[k];
+    std::size_t done = 0;
+    for (; done < selected.size() && !interrupted; ++done) {
+        const std::size_t i = selected[done];
         auto frame_start = Clock::now();
-        auto [scene, load_ms] = next_scene.get();
-        if (k + 1 < selected.size()) next_scene = load_async(selected[k + 1]);
-        if (k == 0) framed = frame_bounds(scene.bounds());
-        Camera camera = settings.camera_given ? settings.camera_at(int(i)) : framed;
-
-        BuiltTree built = builder.build(scene);
-        auto trace_start = Clock::now();
-        RenderInputs render_inputs = prepare_render(scene, settings, camera, kd_u32(i));
-        FrameResult result =
-            opencl_tracer ? render_opencl(session.device(), built.tree, scene, render_inputs)
-                          : render_reference(built.tree, scene, render_inputs, command.threads);
-        double trace_ms = ms_since(trace_start);
-
-        std::string stem = std::filesystem::path(inputs[i]).stem().string();
-        std::filesystem::path image_path = out_dir / (stem + "." + command.format);
-        write_image(image_path, result.image);
-        std::filesystem::path aov_path;
-        if (command.aov) {
-            aov_path = out_dir / (stem + ".aov.exr");
-            write_aov(aov_path, result.hits);
+        try {
+            auto pending = std::move(next_scene);
+            if (done + 1 < selected.size()) next_scene = load_async(selected[done + 1]);
+            auto [scene, load_ms] = pending.get();
+            if (frames.empty()) run.framed = frame_bounds(scene.bounds());
+            frames.push_back(render_frame(run, i, scene, load_ms, frame_start));
+            for (const std::string& warning : scene.warnings)
+                std::cerr << "kdray: warning: " << warning << "\n";
+        } catch (const Error& e) {
+            // Without --keep-going the first bad frame ends the run; the frames before it
+            // are complete, and stats.json below records them.
+            if (!command.keep_going && frames.empty()) throw;
+            failures.push_back({{"frame", i}, {"input", inputs[i]}, {"error", e.what()}});
+            std::cerr << "kdray: error: " << e.what() << "\n";
+            if (!command.keep_going) break;
         }
-        double frame_ms = ms_since(frame_start);
-        frame_times.push_back(frame_ms);
-
-        const RayTotals& rays = result.rays;
-        nlohmann::json frame = {
-            {"frame", i},
-            {"input", inputs[i]},
-            {"image", image_path.filename().string()},
-            {"scene", scene_json(scene)},
-            {"tree", tree_json(built, scene.triangle_count())},
-            {"tracer", command.tracer},
-            {"effects", render_inputs.effects.to_json()},
-            {"load_ms", load_ms},
-            {"build_ms", built.report.build_ms},
-            {"trace_ms", trace_ms},
-            {"frame_ms", frame_ms},
-            {"rays",
-             {{"primary", rays.primary},
-              {"shadow", rays.shadow},
-              {"reflection", rays.reflection},
-              {"refraction", rays.refraction}}},
-            {"mrays_per_s", trace_ms > 0 ? double(rays.total()) / (trace_ms * 1e3) : 0.0}};
-        if (command.aov) frame["aov"] = aov_path.filename().string();
-        frames.push_back(frame);
-        for (const std::string& warning : scene.warnings)
-            std::cerr << "kdray: warning: " << warning << "\n";
-        if (progress) show_progress(k + 1, selected.size(), ms_since(run_start));
+        if (progress) show_progress(done + 1, selected.size(), ms_since(run_start));
     }
 
-    double total_ms = 0, worst_ms = 0;
-    for (double ms : frame_times) total_ms += ms, worst_ms = std::max(worst_ms, ms);
-    double mean_ms = frame_times.empty() ? 0.0 : total_ms / double(frame_times.size());
     nlohmann::json stats = {
         {"kdray_version", "0.1.0"},
         {"builder", builder.description()},
@@ -149,12 +191,21 @@ int run_render(const RenderCommand& command) {
         {"render_file", command.render_file},
         {"image", {{"width", settings.width}, {"height", settings.height}, {"spp", settings.spp}}},
         {"frames", frames},
-        {"summary",
-         {{"frames", frame_times.size()},
-          {"mean_frame_ms", mean_ms},
-          {"worst_frame_ms", worst_ms},
-          {"frames_per_second", mean_ms > 0 ? 1000.0 / mean_ms : 0.0}}}};
-    write_file_atomically(out_dir / "stats.json", stats.dump(2) + "\n");
+        {"summary", summary_json(frames)}};
+    if (!failures.empty()) stats["failed_frames"] = failures;
+    if (interrupted) stats["interrupted_after_frames"] = frames.size();
+    if (!frames.empty()) write_file_atomically(run.out_dir / "stats.json", stats.dump(2) + "\n");
+
+    if (interrupted) {
+        std::cerr << "kdray: interrupted: " << frames.size() << " frame(s) complete in "
+                  << run.out_dir.string() << "\n";
+        return 130;
+    }
+    if (!failures.empty()) {
+        std::cerr << "kdray: " << failures.size() << " of " << selected.size() << " frame(s) failed"
+                  << (command.keep_going ? "" : "; stopped at the first") << "\n";
+        return 1;
+    }
     return 0;
 }
 

@@ -33,8 +33,9 @@ struct RenderCommand {
     std::string tracer = "reference";
     int threads = 0;
     bool quiet = false;
-    std::string frames;  // START:END[:STEP], END included
-    std::string shard;   // I/N
+    std::string frames;       // START:END[:STEP], END included
+    std::string shard;        // I/N
+    bool keep_going = false;  // render the remaining frames after a bad one
     BuilderOptions builder;
 };
 

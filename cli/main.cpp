@@ -80,6 +80,9 @@ int main(int argc, char** argv) {
         ->add_option("--threads", render.threads, "CPU threads for the reference tracer (0: all)")
         ->check(CLI::NonNegativeNumber);
     render_app->add_flag("-q,--quiet", render.quiet, "no progress line");
+    render_app->add_flag("--keep-going", render.keep_going,
+                         "after a bad frame, render the rest; exit 1 with the failed frames "
+                         "listed (default: stop at the first bad frame)");
     render_app->add_option("--frames", render.frames,
                            "render only frames START:END[:STEP] (END included; frame numbers are "
                            "positions in the naturally sorted inputs)");

@@ -3,6 +3,8 @@
 // in-process and against brute force, never against the command's own earlier output.
 #include <doctest/doctest.h>
 
+#include <sys/wait.h>
+
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -164,6 +166,69 @@ TEST_CASE("kdray render --frames and --shard pick frames by their number in the 
     CHECK(run_kdray({"render", (dir / "in" / "f_0.obj").string(), "-o", (dir / "x").string(),
                      "--frames", "a:b"})
               .status == 2);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("an animation with a bad frame: stop at it, or --keep-going past it") {
+    fs::path dir = fresh_temp_dir("cli-keep-going");
+    Scene scene = random_triangles(50, 14);
+    write_obj(dir / "in" / "f_0.obj", scene);
+    write_text_file(dir / "in" / "f_1.obj", "v 0 0 0\nv 1 0 0\nv 0 1 inf\nf 1 2 3\n");
+    write_obj(dir / "in" / "f_2.obj", scene);
+    auto render = [&](const fs::path& out, bool keep_going) {
+        std::vector<std::string> args = {"render",    (dir / "in" / "f_*.obj").string(),
+                                         "-o",        out.string(),
+                                         "--builder", "reference",
+                                         "-q"};
+        if (keep_going) args.push_back("--keep-going");
+        return run_kdray(args);
+    };
+    SUBCASE("by default the run stops at the bad frame; earlier frames stay valid") {
+        CommandResult r = render(dir / "stop", false);
+        CHECK(r.status == 1);
+        CHECK(r.err.find("f_1.obj:3") != std::string::npos);
+        CHECK(fs::exists(dir / "stop" / "f_0.png"));
+        CHECK_FALSE(fs::exists(dir / "stop" / "f_1.png"));
+        CHECK_FALSE(fs::exists(dir / "stop" / "f_2.png"));
+        nlohmann::json stats = read_json(dir / "stop" / "stats.json");
+        CHECK(stats["frames"].size() == 1);
+        CHECK(stats["failed_frames"].size() == 1);
+    }
+    SUBCASE("--keep-going renders the rest and lists the failure") {
+        CommandResult r = render(dir / "keep", true);
+        CHECK(r.status == 1);
+        CHECK(fs::exists(dir / "keep" / "f_0.png"));
+        CHECK_FALSE(fs::exists(dir / "keep" / "f_1.png"));
+        CHECK(fs::exists(dir / "keep" / "f_2.png"));
+        nlohmann::json stats = read_json(dir / "keep" / "stats.json");
+        CHECK(stats["frames"].size() == 2);
+        REQUIRE(stats["failed_frames"].size() == 1);
+        CHECK(stats["failed_frames"][0]["frame"].get<int>() == 1);
+    }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("Ctrl-C mid-run leaves only complete images and a stats.json that lists them") {
+    fs::path dir = fresh_temp_dir("cli-interrupt");
+    Scene scene = random_triangles(3000, 15);
+    for (int f = 0; f < 60; ++f) write_obj(dir / "in" / ("f_" + std::to_string(f) + ".obj"), scene);
+    fs::path out = dir / "out";
+    // SIGINT after a second, as a user's Ctrl-C; --preserve-status returns kdray's own status.
+    std::string command = "timeout --preserve-status -s INT 1 '" + std::string(KDRAY_BINARY) +
+                          "' render '" + (dir / "in").string() + "/f_*.obj' -o '" + out.string() +
+                          "' --builder reference -q 2>/dev/null";
+    int status = std::system(command.c_str());
+    int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    CHECK((code == 130 || code == 0));
+    std::size_t images = 0;
+    for (const auto& entry : fs::directory_iterator(out)) {
+        const std::string name = entry.path().filename().string();
+        CHECK_MESSAGE(name.find(".tmp") == std::string::npos, "a temporary file remains: " << name);
+        if (entry.path().extension() == ".png") ++images;
+    }
+    nlohmann::json stats = read_json(out / "stats.json");
+    CHECK(stats["frames"].size() == images);
+    if (code == 130) CHECK(images < 60);
     fs::remove_all(dir);
 }
 
