@@ -30,7 +30,7 @@ struct RenderCommand {
     std::string render_file;
     bool aov = false;
     std::string format = "png";
-    std::string tracer = "reference";
+    std::string tracer = "opencl";
     int threads = 0;
     bool quiet = false;
     std::string frames;       // START:END[:STEP], END included

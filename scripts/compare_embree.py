@@ -61,6 +61,7 @@ def main():
     parser.add_argument("--builder", default="reference")
     parser.add_argument("--tracer", default="reference")
     parser.add_argument("--peer", help="a built embree_ref (default: build it into a temp dir)")
+    parser.add_argument("--peer-dir", help="build the peer into this folder once and reuse it")
     parser.add_argument("--quick", action="store_true", help="leave out the slowest scenes")
     parser.add_argument("--max-mismatch", type=float, default=1e-4)
     args = parser.parse_args()
@@ -69,7 +70,12 @@ def main():
         print("compare_embree: skipped: ../shared/scenes is absent")
         return SKIP
     with tempfile.TemporaryDirectory(prefix="kdray-compare-") as tmp:
-        peer = args.peer or build_peer(os.path.join(tmp, "peer"))
+        peer = args.peer
+        if not peer and args.peer_dir:
+            built = os.path.join(args.peer_dir, "embree_ref")
+            peer = built if os.path.isfile(built) else build_peer(args.peer_dir)
+        if not peer:
+            peer = build_peer(os.path.join(tmp, "peer"))
         if not peer:
             print("compare_embree: skipped: the Embree peer is not available")
             return SKIP
