@@ -150,6 +150,20 @@ int run_render(const RenderCommand& command) {
     std::signal(SIGINT, on_interrupt);
     std::signal(SIGTERM, on_interrupt);
 
+    if (command.warm_up) {
+        // Benchmarks: build and trace the first frame once, untimed and unwritten, so that
+        // program builds and first-launch costs stay out of every frame's figures.
+        Scene scene = load_obj(inputs[selected[0]]);
+        Camera camera = settings.camera_given ? settings.camera_at(int(selected[0]))
+                                              : frame_bounds(scene.bounds());
+        BuiltTree built = builder.build(scene);
+        RenderInputs render_inputs = prepare_render(scene, settings, camera, 0);
+        if (command.tracer == "opencl")
+            render_opencl(session.device(), built.tree, scene, render_inputs);
+        else
+            render_reference(built.tree, scene, render_inputs, command.threads);
+    }
+
     // The next frame's OBJ loads on another thread while this one builds and traces.
     auto load_async = [&](std::size_t frame) {
         return std::async(std::launch::async, [path = inputs[frame]] {

@@ -36,6 +36,7 @@ struct RenderCommand {
     std::string frames;       // START:END[:STEP], END included
     std::string shard;        // I/N
     bool keep_going = false;  // render the remaining frames after a bad one
+    bool warm_up = false;     // benchmarks: render the first frame once, untimed, before the run
     BuilderOptions builder;
 };
 

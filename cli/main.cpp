@@ -83,6 +83,9 @@ int main(int argc, char** argv) {
     render_app->add_flag("--keep-going", render.keep_going,
                          "after a bad frame, render the rest; exit 1 with the failed frames "
                          "listed (default: stop at the first bad frame)");
+    render_app->add_flag("--warm-up", render.warm_up,
+                         "benchmarks: build and trace the first frame once, untimed, so that "
+                         "program builds and first launches stay out of the frame times");
     render_app->add_option("--frames", render.frames,
                            "render only frames START:END[:STEP] (END included; frame numbers are "
                            "positions in the naturally sorted inputs)");

@@ -1,0 +1,216 @@
+#!/usr/bin/env python3
+"""Render benchmark: kdray's OpenCL build + trace against the Embree peer, side by side in one
+run, with the same camera and thread count.
+
+1. Primary rays, per scene: Mrays/s of kdray's OpenCL tracer (render file without lights and
+   max_depth 1, so only centre rays are cast) against embree_ref's, median over --repeat frames.
+2. Dynamic scenes (the BART Kitchen and Robots frames, horse poses, testdata/anim): mean frame time
+   of kdray (OpenCL build + trace, primary rays, 1024x768) against Embree medium's build + trace of
+   the same frames with the same keyframed cameras.
+3. The glass room (testdata/cornell) at 1 spp, 640x480, with every effect.
+Writes docs/bench-render.md and .csv with the machine it ran on.
+
+  scripts/bench_render.py --kdray build/kdray [--repeat 3] [--scenes SUBSTR]
+"""
+import argparse
+import csv
+import datetime
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_common import (ROOT, SHARED, benchmark_scenes, build_peer, machine_description,  # noqa
+                          median, run_json)
+
+THREADS = os.cpu_count()
+
+
+def camera_at(keys, frame):
+    """conventions.md's keyframed camera: linear between keys, the nearest key held outside."""
+    keys = sorted(keys, key=lambda k: k["frame"])
+    fields = ("position", "look_at", "up", "fov_y")
+    lo = max((k for k in keys if k["frame"] <= frame), key=lambda k: k["frame"], default=keys[0])
+    hi = min((k for k in keys if k["frame"] >= frame), key=lambda k: k["frame"], default=keys[-1])
+    t = 0.0 if hi["frame"] == lo["frame"] else (frame - lo["frame"]) / (hi["frame"] - lo["frame"])
+    out = {}
+    for f in fields:
+        if f in lo:
+            a, b = lo[f], hi.get(f, lo[f])
+            out[f] = ([x + (y - x) * t for x, y in zip(a, b)] if isinstance(a, list)
+                      else a + (b - a) * t)
+    return out
+
+
+def primary_only(render_json, out_path, frame=None):
+    """The render file with no lights and max_depth 1 (and, for a keyframed camera, only the key
+    of `frame` so that the peer, which takes the first key, sees the same camera)."""
+    with open(render_json) as f:
+        j = json.load(f)
+    j["lights"] = []
+    j["max_depth"] = 1
+    j.setdefault("image", {})["spp"] = 1
+    if isinstance(j.get("camera"), list):
+        j["camera"] = camera_at(j["camera"], frame or 0)
+    with open(out_path, "w") as f:
+        json.dump(j, f)
+    return out_path
+
+
+def kdray_frames(kdray, objs, render_json, out_dir):
+    """Renders the frames in one process; returns the per-frame records of stats.json."""
+    subprocess.run([kdray, "render", *objs, "--camera", render_json, "-o", out_dir, "-q",
+                    "--warm-up"],
+                   check=True, capture_output=True, text=True)
+    with open(os.path.join(out_dir, "stats.json")) as f:
+        return json.load(f)["frames"]
+
+
+def primary_rays(kdray, peer, repeat, scenes, tmp):
+    rows = []
+    for name, obj, camera in scenes:
+        render = primary_only(camera, os.path.join(tmp, "primary.json"), frame=0)
+        # The same OBJ under `repeat` names (kdray's --warm-up keeps program builds out).
+        frames_dir = os.path.join(tmp, "frames")
+        shutil.rmtree(frames_dir, ignore_errors=True)
+        os.makedirs(frames_dir)
+        for mtl in (f for f in os.listdir(os.path.dirname(obj)) if f.endswith(".mtl")):
+            os.symlink(os.path.join(os.path.dirname(obj), mtl), os.path.join(frames_dir, mtl))
+        objs = []
+        for k in range(repeat):
+            link = os.path.join(frames_dir, f"f_{k}.obj")
+            os.symlink(obj, link)
+            objs.append(link)
+        frames = kdray_frames(kdray, objs, render, os.path.join(tmp, "out"))
+        row = {"scene": name, "triangles": frames[0]["scene"]["triangles"],
+               "kdray_mrays_per_s": median([f["mrays_per_s"] for f in frames]),
+               "kdray_trace_ms": median([f["trace_ms"] for f in frames]),
+               "kdray_build_ms": median([f["build_ms"] for f in frames])}
+        if peer:
+            emb = run_json([peer, obj, "--camera", render, "--quality", "medium",
+                            "--repeat", str(repeat), "--threads", str(THREADS)])
+            row.update(embree_mrays_per_s=emb["mrays_per_s"], embree_trace_ms=emb["trace_ms"],
+                       embree_build_ms=emb["build_ms"])
+        rows.append(row)
+        print(f"primary {name}: {row}", file=sys.stderr)
+    return rows
+
+
+def dynamic_scenes():
+    found = []
+    for folder in ("bart-kitchen", "bart-robots", "horse-poses"):
+        path = os.path.join(SHARED, "scenes", folder)
+        if os.path.isdir(path):
+            objs = sorted(os.path.join(path, f) for f in os.listdir(path) if f.startswith("frame_"))
+            found.append((folder, objs, os.path.join(path, "render.json")))
+    anim = os.path.join(ROOT, "testdata", "anim")
+    found.append(("testdata/anim", sorted(os.path.join(anim, f) for f in os.listdir(anim)
+                                          if f.endswith(".obj")), os.path.join(anim, "render.json")))
+    return found
+
+
+def dynamic(kdray, peer, tmp):
+    rows = []
+    for name, objs, camera in dynamic_scenes():
+        with open(camera) as f:
+            j = json.load(f)
+        j["lights"] = []
+        j["max_depth"] = 1
+        render = os.path.join(tmp, "dynamic.json")
+        with open(render, "w") as f:
+            json.dump(j, f)
+        frames = kdray_frames(kdray, objs, render, os.path.join(tmp, "dyn"))
+        kd = [f["build_ms"] + f["trace_ms"] for f in frames]
+        row = {"scene": name, "frames": len(objs), "triangles": frames[0]["scene"]["triangles"],
+               "kdray_frame_ms": sum(kd) / len(kd),
+               "kdray_build_ms": sum(f["build_ms"] for f in frames) / len(kd),
+               "kdray_trace_ms": sum(f["trace_ms"] for f in frames) / len(kd)}
+        if peer:
+            em = []
+            for k, obj in enumerate(objs):
+                cam = primary_only(camera, os.path.join(tmp, "peer.json"), frame=k)
+                r = run_json([peer, obj, "--camera", cam, "--quality", "medium", "--repeat", "3",
+                              "--threads", str(THREADS)])
+                em.append(r["build_ms"] + r["trace_ms"])
+            row["embree_frame_ms"] = sum(em) / len(em)
+        rows.append(row)
+        print(f"dynamic {name}: {row}", file=sys.stderr)
+    return rows
+
+
+def glass_room(kdray, tmp):
+    room = os.path.join(ROOT, "testdata", "cornell")
+    objs = [os.path.join(room, "room.obj")] * 1
+    out = os.path.join(tmp, "glass")
+    link_dir = os.path.join(tmp, "glass-in")
+    os.makedirs(link_dir, exist_ok=True)
+    for f in os.listdir(room):
+        if f.endswith(".mtl"):
+            os.symlink(os.path.join(room, f), os.path.join(link_dir, f))
+    objs = []
+    for k in range(4):
+        os.symlink(os.path.join(room, "room.obj"), os.path.join(link_dir, f"room_{k}.obj"))
+        objs.append(os.path.join(link_dir, f"room_{k}.obj"))
+    frames = kdray_frames(kdray, objs, os.path.join(room, "render.json"), out)
+    return {"frame_ms": median([f["frame_ms"] for f in frames]),
+            "build_ms": median([f["build_ms"] for f in frames]),
+            "trace_ms": median([f["trace_ms"] for f in frames]),
+            "rays": frames[-1]["rays"], "effects": frames[-1]["effects"]}
+
+
+def ratio(a, b):
+    return f"{a / b:.2f}" if a and b else ""
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--kdray", default=os.path.join(ROOT, "build", "kdray"))
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--scenes", default="")
+    parser.add_argument("--out", default=os.path.join(ROOT, "docs", "bench-render"))
+    args = parser.parse_args()
+    peer = build_peer()
+    with tempfile.TemporaryDirectory(prefix="kdray-bench-") as tmp:
+        scenes = [s for s in benchmark_scenes() if args.scenes in s[0]]
+        prim = primary_rays(args.kdray, peer, args.repeat, scenes, tmp)
+        dyn = dynamic(args.kdray, peer, tmp)
+        glass = glass_room(args.kdray, tmp)
+
+    lines = ["# Render benchmark", "",
+             f"Run {datetime.date.today()} on {machine_description(args.kdray)}; "
+             f"Embree with {THREADS} threads.", "",
+             "## Primary rays (1 per pixel centre, no shading beyond a headlight)", "",
+             "| scene | triangles | kdray OpenCL Mrays/s | Embree Mrays/s | kdray / Embree |",
+             "|---|---:|---:|---:|---:|"]
+    for r in prim:
+        lines.append(f"| {r['scene']} | {r['triangles']} | {r['kdray_mrays_per_s']:.2f} | "
+                     f"{r.get('embree_mrays_per_s', 0):.2f} | "
+                     f"{ratio(r['kdray_mrays_per_s'], r.get('embree_mrays_per_s'))} |")
+    lines += ["", "## Dynamic scenes: mean frame time, build + trace of primary rays", "",
+              "| sequence | frames | triangles | kdray build ms | kdray trace ms | kdray frame ms "
+              "| Embree medium frame ms | kdray / Embree |", "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in dyn:
+        lines.append(f"| {r['scene']} | {r['frames']} | {r['triangles']} | {r['kdray_build_ms']:.1f} "
+                     f"| {r['kdray_trace_ms']:.1f} | {r['kdray_frame_ms']:.1f} | "
+                     f"{r.get('embree_frame_ms', 0):.1f} | "
+                     f"{ratio(r['kdray_frame_ms'], r.get('embree_frame_ms'))} |")
+    lines += ["", "## Glass room (testdata/cornell), 640x480, 1 spp, shadows + reflection + refraction",
+              "", f"Frame {glass['frame_ms']:.0f} ms (build {glass['build_ms']:.1f} ms, trace "
+              f"{glass['trace_ms']:.0f} ms); rays {json.dumps(glass['rays'])}."]
+    os.makedirs(os.path.dirname(args.out), exist_ok=True)
+    with open(args.out + ".md", "w") as f:
+        f.write("\n".join(lines) + "\n")
+    with open(args.out + ".csv", "w", newline="") as f:
+        rows = [dict(kind="primary", **r) for r in prim] + [dict(kind="dynamic", **r) for r in dyn]
+        writer = csv.DictWriter(f, fieldnames=sorted({k for r in rows for k in r}))
+        writer.writeheader()
+        writer.writerows(rows)
+    print("\n".join(lines))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
