@@ -68,10 +68,15 @@ void print_rows(std::ostream& out, const nlohmann::json& object, const std::stri
 void print_table(std::ostream& out, const nlohmann::json& report) {
     for (const auto& [section, value] : report.items()) {
         out << section << '\n';
-        if (value.is_object())
+        if (value.is_object()) {
             print_rows(out, value, "");
-        else
+        } else if (value.is_array() && !value.empty() && value[0].is_object()) {
+            // A list of records (devices, say): one block each, numbered.
+            for (std::size_t i = 0; i < value.size(); ++i)
+                print_rows(out, value[i], "[" + std::to_string(i) + "].");
+        } else {
             out << "  " << value.dump() << '\n';
+        }
     }
 }
 
