@@ -1,7 +1,12 @@
 // launch.h — one-dimensional kernel launches with kdray's error context. Every kernel of the
 // builder takes its element count as an argument and returns early past it, so the global size is
-// rounded up to a multiple of 64 (a warp/wavefront multiple on GPUs) and the work-group size is
-// left to the implementation.
+// rounded up to a multiple of kLaunchGroup and every launch uses that one work-group size.
+//
+// Why a fixed work-group size: PoCL compiles a separate work-group function for every local size
+// it meets, and left to itself it picks the local size from the global size, which changes at
+// every level of a build. Each new size was a compile (first run) or a dlopen of the cached
+// variant (every later run): 8% of a kitchen build's profile sat in ld.so's symbol lookup. With
+// one size each kernel has one variant. 64 is a warp/wavefront multiple on GPUs.
 #pragma once
 
 #include <cstddef>
@@ -12,6 +17,9 @@
 #include "cl/cl_error.h"
 
 namespace kdray {
+
+/// The work-group size of every launch (see above).
+inline constexpr std::size_t kLaunchGroup = 64;
 
 /// Sets the kernel's arguments in order.
 template <class... Args>
@@ -28,8 +36,9 @@ void enqueue_kernel(cl::CommandQueue& queue, cl::Kernel& kernel, std::size_t cou
     if (count == 0) return;
     try {
         set_kernel_args(kernel, args...);
-        const std::size_t global = (count + 63) / 64 * 64;
-        queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(global), cl::NullRange);
+        const std::size_t global = (count + kLaunchGroup - 1) / kLaunchGroup * kLaunchGroup;
+        queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(global),
+                                   cl::NDRange(kLaunchGroup));
     } catch (const cl::Error& e) {
         throw_cl_error("running kernel " + kernel.getInfo<CL_KERNEL_FUNCTION_NAME>() + " over " +
                            std::to_string(count) + " items",

@@ -352,7 +352,7 @@ void run_small_stage(Build& b, int max_depth) {
     checked_u32(candidates, "split candidates");
     DeviceArray below = b.allocate(candidates * 8, "candidate below masks");
     DeviceArray above = b.allocate(candidates * 8, "candidate above masks");
-    enqueue_kernel(q, k.split_masks, candidates, cl_uint(candidates), b.small_ref_box.buffer(),
+    enqueue_kernel(q, k.split_masks, b.small_refs, b.small_refs, b.small_ref_box.buffer(),
                    b.small_ref_root.buffer(), b.root_ref_start.buffer(), b.root_ref_count.buffer(),
                    below.buffer(), above.buffer());
 

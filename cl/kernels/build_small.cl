@@ -12,34 +12,72 @@
 #include "cl/kernels/build_common.cl"
 
 /* Split candidates (§4.2, "small node preprocessing"): for each candidate plane the set of the
- * root's triangles below it and the set above it, by the same rule (kd_classify) as every split. */
-__kernel void kd_compute_split_masks(uint candidates, __global const float* ref_box,
+ * root's triangles below it and the set above it, by the same rule (kd_classify) as every split.
+ * One work-item per reference computes its six candidates together, so each box of the root is
+ * loaded once for six planes rather than once per plane, and the work-items of one root run the
+ * same loop (they vectorise across work-items on CPU devices, and stay converged on GPUs). */
+__kernel void kd_compute_split_masks(uint refs, __global const float* ref_box,
                                      __global const uint* ref_root,
                                      __global const uint* root_ref_start,
                                      __global const uint* root_ref_count,
                                      __global ulong* below_mask, __global ulong* above_mask) {
-    const uint c = get_global_id(0);
-    if (c >= candidates) return;
-    const uint ref = c / 6, axis = (c % 6) / 2, side = c % 2;
-    const float pos = ref_box[(size_t)ref * 6 + side * 3 + axis];
+    const uint ref = get_global_id(0);
+    if (ref >= refs) return;
+    float pos[6];
+    for (uint k = 0; k < 6; ++k) pos[k] = ref_box[(size_t)ref * 6 + (k % 2) * 3 + k / 2];
     const uint root = ref_root[ref];
     const uint start = root_ref_start[root], count = root_ref_count[root];
-    ulong below = 0, above = 0;
+    ulong below[6] = {0, 0, 0, 0, 0, 0}, above[6] = {0, 0, 0, 0, 0, 0};
     for (uint j = 0; j < count; ++j) {
         __global const float* b = ref_box + (size_t)(start + j) * 6;
-        const uint sides = kd_classify(b[axis], b[3 + axis], pos, KDRAY_BELOW);
-        below |= (ulong)(sides & 1u) << j;
-        above |= (ulong)(sides >> 1) << j;
+        for (uint k = 0; k < 6; ++k) {
+            const uint axis = k / 2;
+            const uint sides = kd_classify(b[axis], b[3 + axis], pos[k], KDRAY_BELOW);
+            below[k] |= (ulong)(sides & 1u) << j;
+            above[k] |= (ulong)(sides >> 1) << j;
+        }
     }
-    below_mask[c] = below;
-    above_mask[c] = above;
+    for (uint k = 0; k < 6; ++k) {
+        below_mask[(size_t)ref * 6 + k] = below[k];
+        above_mask[(size_t)ref * 6 + k] = above[k];
+    }
+}
+
+/* The SAH of the node's split candidates on one axis whose planes lie strictly inside the node,
+ * folded into the running best (kd_split_small_nodes' inner step; `axis` is a constant at every
+ * call, so the per-axis selects fold away). */
+inline void kd_best_small_split(uint axis, float lo, float hi, float cross, float ring,
+                                ulong mask, __global const float* box, uint candidate,
+                                __global const ulong* below_mask,
+                                __global const ulong* above_mask, float cost_traversal,
+                                float cost_scale, float empty_scale, float* best_cost,
+                                uint* best_axis, float* best_pos, uint* best_candidate) {
+    for (uint side = 0; side < 2; ++side) {
+        const float pos = box[side * 3 + axis];
+        if (!(pos > lo && pos < hi)) continue;
+        const uint c = candidate + side;
+        const uint n_below = popcount(mask & below_mask[c]);
+        const uint n_above = popcount(mask & above_mask[c]);
+        /* Child areas from the shared cross-section and the perimeter of the other axes. */
+        const float area_below = cross + (pos - lo) * ring;
+        const float area_above = cross + (hi - pos) * ring;
+        float cost = cost_traversal +
+                     cost_scale * ((float)n_below * area_below + (float)n_above * area_above);
+        if (n_below == 0 || n_above == 0) cost *= empty_scale;
+        if (cost < *best_cost) {
+            *best_cost = cost, *best_axis = axis, *best_pos = pos, *best_candidate = c;
+        }
+    }
 }
 
 /* SAH split of small nodes (§4.2): for every candidate of the node's triangles that lies strictly
  * inside the node's box, SAH(x) = C_t + C_i (N_L SA_L + N_R SA_R) / SA, the counts by popcount of
  * the node's mask and the candidate's masks, scaled by (1 - empty_bonus) when a side is empty as
  * in the reference builder. The node becomes a leaf when C_i N is no more than the best, at the
- * depth limit, or when its box has no area. split_flag (0/1) is scanned into child positions. */
+ * depth limit, or when its box has no area. split_flag (0/1) is scanned into child positions.
+ *
+ * Only the candidates of the node's own triangles (the set bits of its mask) are evaluated: the
+ * SAH is piecewise linear between those boundaries, so its minimum lies on one of them. */
 __kernel void kd_split_small_nodes(uint nodes, __global const float* node_box,
                                    __global const ulong* node_mask,
                                    __global const uint* node_root, __global const uint* node_depth,
@@ -60,37 +98,28 @@ __kernel void kd_split_small_nodes(uint nodes, __global const float* node_box,
     split_axis[i] = KDRAY_LEAF_AXIS;
     if (n == 0 || node_depth[i] >= max_depth || !(area > 0.0f)) return;
 
-    const float inv_area = 1.0f / area;
-    const float3 extent = box.hi - box.lo;
+    /* Child area = 2 (cross + d * ring); the 2 and 1/area fold into one scale of the counts. */
+    const float cost_scale = cost_intersection * 2.0f / area;
+    const float3 e = box.hi - box.lo;
     const uint start = root_ref_start[node_root[i]];
     float best_cost = cost_intersection * (float)n;
     uint best_axis = KDRAY_LEAF_AXIS, best_candidate = 0;
     float best_pos = 0.0f;
     for (ulong rest = mask; rest != 0; rest &= rest - 1) {
-        const uint j = (uint)popcount((rest & (0ul - rest)) - 1ul); /* lowest set bit */
-        const uint ref = start + j;
-        for (uint k = 0; k < 6; ++k) {
-            const uint axis = k / 2;
-            const float pos = ref_box[(size_t)ref * 6 + (k % 2) * 3 + axis];
-            const float lo = kd_axis_of(box.lo, axis), hi = kd_axis_of(box.hi, axis);
-            if (!(pos > lo && pos < hi)) continue;
-            const uint c = ref * 6 + k;
-            const uint n_below = popcount(mask & below_mask[c]);
-            const uint n_above = popcount(mask & above_mask[c]);
-            /* Child areas from the shared cross-section and the perimeter of the other axes. */
-            const float e0 = kd_axis_of(extent, (axis + 1) % 3);
-            const float e1 = kd_axis_of(extent, (axis + 2) % 3);
-            const float cross = e0 * e1, ring = e0 + e1;
-            const float area_below = 2.0f * (cross + (pos - lo) * ring);
-            const float area_above = 2.0f * (cross + (hi - pos) * ring);
-            float cost = cost_traversal +
-                         cost_intersection * inv_area *
-                             ((float)n_below * area_below + (float)n_above * area_above);
-            if (n_below == 0 || n_above == 0) cost *= 1.0f - empty_bonus;
-            if (cost < best_cost) {
-                best_cost = cost, best_axis = axis, best_pos = pos, best_candidate = c;
-            }
-        }
+        const uint ref = start + (uint)popcount((rest & (0ul - rest)) - 1ul); /* lowest set bit */
+        __global const float* b = ref_box + (size_t)ref * 6;
+        kd_best_small_split(0, box.lo.x, box.hi.x, e.y * e.z, e.y + e.z, mask, b, ref * 6 + 0,
+                            below_mask, above_mask, cost_traversal, cost_scale,
+                            1.0f - empty_bonus, &best_cost, &best_axis, &best_pos,
+                            &best_candidate);
+        kd_best_small_split(1, box.lo.y, box.hi.y, e.z * e.x, e.z + e.x, mask, b, ref * 6 + 2,
+                            below_mask, above_mask, cost_traversal, cost_scale,
+                            1.0f - empty_bonus, &best_cost, &best_axis, &best_pos,
+                            &best_candidate);
+        kd_best_small_split(2, box.lo.z, box.hi.z, e.x * e.y, e.x + e.y, mask, b, ref * 6 + 4,
+                            below_mask, above_mask, cost_traversal, cost_scale,
+                            1.0f - empty_bonus, &best_cost, &best_axis, &best_pos,
+                            &best_candidate);
     }
     if (best_axis == KDRAY_LEAF_AXIS) return;
     split_flag[i] = 1;
