@@ -423,6 +423,11 @@ DeviceArray write_preorder(Build& b, DeviceArray& leaf_indices, cl_uint& leaf_in
 
 }  // namespace
 
+void prepare_opencl_builder(ClDevice& device, [[maybe_unused]] const BuildParams& params) {
+    const Kernels kernels(device);
+    const ClPrimitives primitives(device);
+}
+
 KdTree build_opencl(ClDevice& device, const Scene& scene, const BuildParams& params,
                     BuildReport* report) {
     const auto start = std::chrono::steady_clock::now();

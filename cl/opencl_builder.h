@@ -18,6 +18,13 @@ namespace kdray {
 /// it receives the per-stage times (upload, aabbs, large_nodes, small_nodes, output, download),
 /// build_ms, the level counts of both stages and the peak device memory. Throws Error on any
 /// OpenCL failure, naming the step. An empty scene gives a single empty leaf.
+/// Builds (through cl/program_cache) every OpenCL program build_opencl uses on `device`, so that a
+/// caller can keep program compilation out of its first build's time; a later build_opencl on the
+/// device then builds no program. `params` are the parameters the builds will use: the programs do
+/// not depend on them today (every parameter is a kernel argument), so any params prepare the same
+/// programs, but a caller need not know that.
+void prepare_opencl_builder(ClDevice& device, const BuildParams& params = {});
+
 KdTree build_opencl(ClDevice& device, const Scene& scene, const BuildParams& params = {},
                     BuildReport* report = nullptr);
 

@@ -150,6 +150,22 @@ TEST_CASE("opencl builder: empty scene, report, and programs built once") {
     CHECK(report.build_ms > 0);
 }
 
+TEST_CASE("opencl builder: prepare_opencl_builder builds every program a build needs") {
+    // A fresh context has an empty program cache (it is keyed by context), so this proves that
+    // prepare covers every program, not only that a second build reuses the first's.
+    ClDevice device("");
+    const BuildParams params;
+    prepare_opencl_builder(device, params);
+    const int builds = program_build_count();
+    // 3000 triangles take every stage: large nodes, small roots, small levels and output.
+    const Scene scene = test::random_triangles(3000, 8);
+    const KdTree tree = build_opencl(device, scene, params);
+    CHECK(program_build_count() == builds);
+    CHECK(check_tree(tree, scene).empty());
+    prepare_opencl_builder(device, params);
+    CHECK(program_build_count() == builds);
+}
+
 TEST_CASE("opencl builder: depth limit and leaf threshold are respected") {
     const Scene scene = test::random_triangles(2000, 21);
     BuildParams params;
