@@ -203,12 +203,46 @@ KDRAY_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
     }
 }
 
+/* One sample when neither reflection nor refraction is on: the primary ray and its direct light,
+ * with no pending-ray stack (a private array of KDRAY_MAX_BOUNCES + 1 rays per work-item that a
+ * CPU device keeps in memory and a GPU in scratch). Its arithmetic is kd_trace_sample's for a
+ * tree of one ray (weight 1, nothing pushed), so the two give identical colours. */
+KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdView* view,
+                                             KdRay primary, kd_f32* rgb, KdRayCounts* rays,
+                                             KdHit* first_hit, kd_f32* first_normal) {
+    rays->primary += 1u;
+    const KdHit hit = kd_trace_closest(scene->nodes, scene->leaf_indices, scene->triangles,
+                                       scene->bounds, primary);
+    kd_f32 n[3] = {0.0f, 0.0f, 0.0f};
+    if (hit.prim != KDRAY_NO_HIT)
+        kd_facing_normal(scene->triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE,
+                         primary.dir, n);
+    if (first_hit) {
+        *first_hit = hit;
+        kd_set3(first_normal, n[0], n[1], n[2]);
+    }
+    if (hit.prim == KDRAY_NO_HIT) {
+        for (int c = 0; c < 3; ++c) rgb[c] = 0.0f + view->background[c];
+        return;
+    }
+    KDRAY_GLOBAL const KdMaterial* m = scene->materials + scene->material_ids[hit.prim];
+    kd_f32 p[3], direct[3] = {0.0f, 0.0f, 0.0f};
+    for (int a = 0; a < 3; ++a) p[a] = primary.org[a] + hit.t * primary.dir[a];
+    const kd_f32 surface = 1.0f - m->transmit_fraction;
+    if (surface > 0.0f) kd_direct_light(scene, view, m, p, n, primary.dir, direct, rays);
+    for (int c = 0; c < 3; ++c) rgb[c] = 0.0f + (m->emission[c] + surface * direct[c]);
+}
+
 /* Traces one sample's ray tree from the primary ray and returns its colour. The pending stack
  * holds at most one ray per level: each traced ray pushes at most two, one of which is traced
  * next. */
 KDRAY_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* view, KdRay primary,
                                   kd_f32* rgb, KdRayCounts* rays, KdHit* first_hit,
                                   kd_f32* first_normal) {
+    if (!KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFLECTION | KDRAY_EFFECT_REFRACTION)) {
+        kd_trace_direct_sample(scene, view, primary, rgb, rays, first_hit, first_normal);
+        return;
+    }
     KdPendingRay stack[KDRAY_MAX_BOUNCES + 1];
     const kd_f32 one[3] = {1.0f, 1.0f, 1.0f};
     stack[0] = kd_pending(primary.org, primary.dir, one, 1u, 0u);

@@ -33,6 +33,19 @@
 #define KDRAY_HAS_DOUBLE 1
 #endif
 
+/* The walk and the triangle test are always inlined into their caller: PoCL (LLVM at -O2) left
+ * kd_trace, kd_intersect_triangle and kd_trace_sample as calls, which keeps the per-ray constants
+ * in memory behind pointers. Compilers without the attribute get plain inline. */
+#if defined(__clang__) || defined(__GNUC__)
+#define KDRAY_HOT_INLINE inline __attribute__((always_inline))
+#else
+#define KDRAY_HOT_INLINE inline
+#endif
+
+/* Component k (0, 1 or 2) of a three-float array by selects, not by a variable index: a private
+ * array indexed by a variable cannot live in registers (on a GPU it goes to scratch memory). */
+#define KDRAY_PICK3(v, k) ((k) == 0 ? (v)[0] : ((k) == 1 ? (v)[1] : (v)[2]))
+
 /* Per-ray constants of the watertight test (Woop, Benthin, Wald 2013, "Watertight Ray/Triangle
  * Intersection", JCGT 2(1)): the axis kz where the direction is largest becomes the ray's z, kx and
  * ky are swapped to keep the winding when dir[kz] < 0, and the shear maps the direction onto +z. */
@@ -42,9 +55,10 @@ typedef struct KdRayPrecomp {
     kd_f32 inv_dir[3];
     kd_i32 kx, ky, kz;
     kd_f32 sx, sy, sz;
+    kd_f32 ox, oy, oz; /* org[kx], org[ky], org[kz] */
 } KdRayPrecomp;
 
-KDRAY_INLINE KdRayPrecomp kd_ray_precompute(KdRay ray) {
+KDRAY_HOT_INLINE KdRayPrecomp kd_ray_precompute(KdRay ray) {
     KdRayPrecomp p;
     for (int a = 0; a < 3; ++a) {
         p.org[a] = ray.org[a];
@@ -55,14 +69,19 @@ KDRAY_INLINE KdRayPrecomp kd_ray_precompute(KdRay ray) {
     p.kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
     p.kx = (p.kz + 1) % 3;
     p.ky = (p.kx + 1) % 3;
-    if (ray.dir[p.kz] < 0.0f) {
+    if (KDRAY_PICK3(ray.dir, p.kz) < 0.0f) {
         kd_i32 swap = p.kx;
         p.kx = p.ky;
         p.ky = swap;
     }
-    p.sx = ray.dir[p.kx] / ray.dir[p.kz];
-    p.sy = ray.dir[p.ky] / ray.dir[p.kz];
-    p.sz = 1.0f / ray.dir[p.kz];
+    const kd_f32 dx = KDRAY_PICK3(ray.dir, p.kx), dy = KDRAY_PICK3(ray.dir, p.ky),
+                 dz = KDRAY_PICK3(ray.dir, p.kz);
+    p.sx = dx / dz;
+    p.sy = dy / dz;
+    p.sz = 1.0f / dz;
+    p.ox = KDRAY_PICK3(ray.org, p.kx);
+    p.oy = KDRAY_PICK3(ray.org, p.ky);
+    p.oz = KDRAY_PICK3(ray.org, p.kz);
     return p;
 }
 
@@ -72,18 +91,18 @@ KDRAY_INLINE KdRayPrecomp kd_ray_precompute(KdRay ray) {
  * stop being collinear after rounding into ray space, which is why scenes collapse zero-area
  * triangles to a point when they are loaded (collapse_zero_area_triangles). Returns 1 on a new
  * best hit. */
-KDRAY_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL const kd_f32* tri,
-                                       kd_u32 id, kd_f32 tmin, KdHit* best) {
-    /* Vertices relative to the ray origin, then sheared and scaled into ray space. */
-    kd_f32 a[3], b[3], c[3];
-    for (int k = 0; k < 3; ++k) {
-        a[k] = tri[k] - p->org[k];
-        b[k] = tri[3 + k] - p->org[k];
-        c[k] = tri[6 + k] - p->org[k];
-    }
-    const kd_f32 ax = a[p->kx] - p->sx * a[p->kz], ay = a[p->ky] - p->sy * a[p->kz];
-    const kd_f32 bx = b[p->kx] - p->sx * b[p->kz], by = b[p->ky] - p->sy * b[p->kz];
-    const kd_f32 cx = c[p->kx] - p->sx * c[p->kz], cy = c[p->ky] - p->sy * c[p->kz];
+KDRAY_HOT_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL const kd_f32* tri,
+                                           kd_u32 id, kd_f32 tmin, KdHit* best) {
+    /* Vertices relative to the ray origin, then sheared and scaled into ray space. The permuted
+     * components are read straight from the triangle (a variable offset into global memory costs
+     * nothing), so no private array is indexed by kx/ky/kz; the arithmetic is unchanged. */
+    const kd_u32 kx = (kd_u32)p->kx, ky = (kd_u32)p->ky, kz = (kd_u32)p->kz;
+    const kd_f32 a_x = tri[kx] - p->ox, a_y = tri[ky] - p->oy, a_z = tri[kz] - p->oz;
+    const kd_f32 b_x = tri[3 + kx] - p->ox, b_y = tri[3 + ky] - p->oy, b_z = tri[3 + kz] - p->oz;
+    const kd_f32 c_x = tri[6 + kx] - p->ox, c_y = tri[6 + ky] - p->oy, c_z = tri[6 + kz] - p->oz;
+    const kd_f32 ax = a_x - p->sx * a_z, ay = a_y - p->sy * a_z;
+    const kd_f32 bx = b_x - p->sx * b_z, by = b_y - p->sy * b_z;
+    const kd_f32 cx = c_x - p->sx * c_z, cy = c_y - p->sy * c_z;
 
     /* Scaled barycentrics; an exact zero is ambiguous in float and is recomputed in double, which
      * is what makes the test watertight on edges. */
@@ -101,7 +120,7 @@ KDRAY_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL const
     const kd_f32 det = u + v + w;
     if (det == 0.0f) return 0;
 
-    const kd_f32 az = p->sz * a[p->kz], bz = p->sz * b[p->kz], cz = p->sz * c[p->kz];
+    const kd_f32 az = p->sz * a_z, bz = p->sz * b_z, cz = p->sz * c_z;
     const kd_f32 t_scaled = u * az + v * bz + w * cz;
     /* Compare before dividing, with det's sign folded in: no division for rejected hits. */
     const kd_f32 sign = det < 0.0f ? -1.0f : 1.0f;
@@ -119,8 +138,8 @@ KDRAY_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL const
 
 /* Clips the ray's [*t0, *t1] to the box {lo, hi}. Returns 0 when they do not overlap. A ray
  * lying in a box face (flat boxes included) counts as inside. */
-KDRAY_INLINE int kd_clip_to_box(const KdRayPrecomp* p, const kd_f32* lo, const kd_f32* hi,
-                                kd_f32* t0, kd_f32* t1) {
+KDRAY_HOT_INLINE int kd_clip_to_box(const KdRayPrecomp* p, const kd_f32* lo, const kd_f32* hi,
+                                    kd_f32* t0, kd_f32* t1) {
     for (int a = 0; a < 3; ++a) {
         /* Parallel to this slab: inside it (faces included) or never. The slab distances would be
          * 0 * inf = NaN for an origin lying in a face. */
@@ -150,10 +169,10 @@ typedef struct KdTraversalEntry {
  * KDRAY_MAX_DEPTH entries: one push per inner node on the current path, and builders never make a
  * path deeper than that. Hits are accepted wherever they lie on the ray (a triangle in a leaf may
  * extend beyond it); the walk ends when the best hit is nearer than the next node's entry. */
-KDRAY_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
-                            KDRAY_GLOBAL const kd_u32* leaf_indices,
-                            KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds, KdRay ray,
-                            int any_hit) {
+KDRAY_HOT_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
+                                KDRAY_GLOBAL const kd_u32* leaf_indices,
+                                KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
+                                KdRay ray, int any_hit) {
     KdHit hit;
     hit.t = ray.tmax;
     hit.prim = KDRAY_NO_HIT;
@@ -178,7 +197,7 @@ KDRAY_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
              * crosses the plane within [tmin, tmax]. */
             const kd_u32 axis = kd_node_axis(node);
             const kd_f32 split = kd_node_split(node);
-            const kd_f32 o = p.org[axis], d = p.dir[axis];
+            const kd_f32 o = KDRAY_PICK3(p.org, axis), d = KDRAY_PICK3(p.dir, axis);
             const kd_u32 below = node_index + 1, above = kd_node_above_child(node);
             if (d == 0.0f && o == split) {
                 /* Lying in the plane: both children hold triangles the ray may hit. */
@@ -189,7 +208,7 @@ KDRAY_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
                 node_index = below;
                 continue;
             }
-            const kd_f32 t_plane = (split - o) * p.inv_dir[axis];
+            const kd_f32 t_plane = (split - o) * KDRAY_PICK3(p.inv_dir, axis);
             /* On the plane, the child the ray leaves is visited first over [tmin, 0] (hits at
              * t = 0 on triangles lying in the plane), then the one it enters over [0, tmax]. */
             const int below_first = (o < split) || (o == split && d > 0.0f);
@@ -228,18 +247,18 @@ KDRAY_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
     return hit;
 }
 
-KDRAY_INLINE KdHit kd_trace_closest(KDRAY_GLOBAL const KdNode* nodes,
-                                    KDRAY_GLOBAL const kd_u32* leaf_indices,
-                                    KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
-                                    KdRay ray) {
+KDRAY_HOT_INLINE KdHit kd_trace_closest(KDRAY_GLOBAL const KdNode* nodes,
+                                        KDRAY_GLOBAL const kd_u32* leaf_indices,
+                                        KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
+                                        KdRay ray) {
     return kd_trace(nodes, leaf_indices, triangles, bounds, ray, 0);
 }
 
 /* 1 when anything blocks the ray within [tmin, tmax). */
-KDRAY_INLINE int kd_trace_occluded(KDRAY_GLOBAL const KdNode* nodes,
-                                   KDRAY_GLOBAL const kd_u32* leaf_indices,
-                                   KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
-                                   KdRay ray) {
+KDRAY_HOT_INLINE int kd_trace_occluded(KDRAY_GLOBAL const KdNode* nodes,
+                                       KDRAY_GLOBAL const kd_u32* leaf_indices,
+                                       KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
+                                       KdRay ray) {
     return kd_trace(nodes, leaf_indices, triangles, bounds, ray, 1).prim != KDRAY_NO_HIT;
 }
 
