@@ -19,20 +19,50 @@ DeviceArray& DeviceArray::operator=(DeviceArray&& other) noexcept {
 }
 
 void DeviceArray::release() {
-    if (owner_) owner_->current_ -= bytes_;
+    if (owner_) owner_->recycle(std::move(buffer_), bytes_);
     buffer_ = cl::Buffer();
     bytes_ = 0;
     owner_ = nullptr;
 }
 
 DeviceArray DeviceMemory::allocate(std::size_t bytes, const std::string& what) {
+    bytes = std::max<std::size_t>(bytes, 1);
     DeviceArray array;
-    array.buffer_ = device_.allocate(bytes, what);
-    array.bytes_ = std::max<std::size_t>(bytes, 1);
     array.owner_ = this;
-    current_ += array.bytes_;
+    // The smallest spare that fits and wastes at most half of itself (small requests may take any
+    // spare up to 4 KiB, the size of a page).
+    auto best = spares_.end();
+    const std::size_t limit = std::max<std::size_t>(2 * bytes, 4096);
+    for (auto it = spares_.begin(); it != spares_.end(); ++it)
+        if (it->bytes >= bytes && it->bytes <= limit &&
+            (best == spares_.end() || it->bytes < best->bytes))
+            best = it;
+    if (best != spares_.end()) {
+        array.buffer_ = std::move(best->buffer);
+        array.bytes_ = best->bytes;
+        spare_bytes_ -= array.bytes_;
+        spares_.erase(best);
+        return array;  // already counted in current_
+    }
+    array.buffer_ = device_.allocate(bytes, what);
+    array.bytes_ = bytes;
+    current_ += bytes;
     peak_ = std::max(peak_, current_);
     return array;
+}
+
+void DeviceMemory::recycle(cl::Buffer buffer, std::size_t bytes) {
+    spares_.push_back({bytes, std::move(buffer)});
+    spare_bytes_ += bytes;
+    // Spares beyond what is in use are given back, oldest first, so that recycling raises the
+    // build's peak only a little (kitchen: 92 -> 99 MB) while it keeps the buffers of the level
+    // before, which the next level's arrays mostly fit (kernel time 52 -> 30 ms per build; with
+    // no bound it was 30 ms too, but the peak 225 MB).
+    while (spare_bytes_ > current_ - spare_bytes_ && !spares_.empty()) {
+        spare_bytes_ -= spares_.front().bytes;
+        current_ -= spares_.front().bytes;
+        spares_.erase(spares_.begin());
+    }
 }
 
 void DeviceMemory::reserve(DeviceArray& array, std::size_t bytes, std::size_t used,
