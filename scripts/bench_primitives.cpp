@@ -14,7 +14,8 @@
 // Every output is checked against std::exclusive_scan / std::copy_if (outside the timed region,
 // after the output buffer was overwritten with a sentinel) and the program aborts on a mismatch.
 //
-// Output: tab-separated lines "first|steady <TAB> op <TAB> impl <TAB> n <TAB> milliseconds".
+// Output: tab-separated lines "first|steady|varying-new|varying-seen <TAB> op <TAB> impl <TAB> n
+// <TAB> milliseconds".
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -260,5 +261,29 @@ int main(int argc, char** argv) {
                      median(times[k]));
         }
     }
+
+    // Varying sizes, as in the kd-tree build, where every level's arrays have a new length: one
+    // call at each of kVarying sizes never seen before in this process, then the same sizes again.
+    // Launches whose local size the runtime picks from the global size (PoCL does) meet a new
+    // work-group variant (a compile, or a load from PoCL's cache) at each new size.
+    constexpr std::size_t kVarying = 40, kVaryingBase = 100003, kVaryingStep = 1009;
+    Inputs base = make_inputs(device, kVaryingBase + kVarying * kVaryingStep);
+    std::vector<Inputs> varying;
+    for (std::size_t i = 0; i < kVarying; ++i) {
+        Inputs in = base;
+        in.n = kVaryingBase + i * kVaryingStep;
+        in.values.resize(in.n);
+        in.scan_expected.resize(in.n);
+        in.kept_expected.clear();
+        std::copy_if(in.values.begin(), in.values.end(), std::back_inserter(in.kept_expected),
+                     [](cl_uint v) { return (v & 1u) != 0u; });
+        varying.push_back(std::move(in));
+    }
+    for (const Impl& impl : impls)
+        for (const char* pass : {"varying-new", "varying-seen"}) {
+            double total = 0;
+            for (Inputs& in : varying) total += timed_call(device, in, impl);
+            emit(pass, impl.op == Op::kScan ? "scan" : "compact", impl.name, kVarying, total);
+        }
     return 0;
 }

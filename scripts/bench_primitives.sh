@@ -6,13 +6,15 @@
 #
 # One process on an empty PoCL kernel cache measures the cold first calls (programs compiled from
 # source); then PROCESSES full runs on the now-warm cache each measure the warm first calls and
-# the steady-state medians (7 runs per size, each after a warm-up); the report keeps, per cell,
-# the median over those processes. Everything runs at nice 10: others may be measuring on the
+# the steady-state medians (7 runs per size, each after a warm-up) and the cost of 40 sizes never
+# seen before (the kd-tree build's situation); the report keeps, per cell, the median over those
+# processes (PROCESSES >= 2: the first one's PoCL cache has not seen the 40 sizes). Everything runs at nice 10: others may be measuring on the
 # machine. Set KDRAY_BENCH_DEVICE to pick a device (ClDevice's selector).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 processes=${1:-3}
+if ((processes < 2)); then echo "PROCESSES must be at least 2" >&2; exit 2; fi
 build_dir=build-bench
 out_md=docs/bench-primitives.md
 device_args=()
@@ -144,6 +146,25 @@ for op, impl in (("scan", KS), ("scan", BS), ("compact", KC), ("compact", BC), (
         s = ("steady", op, impl, n)
         steady = ms(med[s]) if s in med else "–"
         L.append(f"| {impl} | {n:,} | {ms(cold[f])} | {ms(med[f])} | {steady} |")
+L.append("")
+L.append("## Varying sizes (as in the kd-tree build)")
+L.append("")
+L.append("The builder's arrays change length at every level. Total milliseconds for one call at "
+         "each of 40 sizes not yet seen in the process (n = 100,003 + 1,009·i), then for the same "
+         "40 sizes again. kdray launches every kernel with one work-group size (`cl/launch.h`); "
+         "Boost.Compute leaves the local size to the runtime, and PoCL derives it from the global "
+         "size, so a new n can mean a new work-group variant: compiled (empty PoCL cache: the "
+         "first full-run process, whose cache has never seen these sizes) or loaded from PoCL's "
+         "cache (later processes).")
+L.append("")
+L.append("| call | 40 new sizes, empty PoCL cache | 40 new sizes, warm PoCL cache | same 40 sizes again |")
+L.append("|---|---:|---:|---:|")
+r1 = read(f"{res}/warm1.tsv")
+later = [read(f"{res}/warm{p}.tsv") for p in range(2, processes + 1)]
+for op, impl in (("scan", KS), ("scan", BS), ("compact", KC), ("compact", BC), ("compact", BF)):
+    new, seen = ("varying-new", op, impl, 40), ("varying-seen", op, impl, 40)
+    warm_new = ms(statistics.median(r[new] for r in later)) if later else "–"
+    L.append(f"| {impl} | {ms(r1[new])} | {warm_new} | {ms(med[seen])} |")
 L.append("")
 open(out, "w").write("\n".join(L))
 print("\n".join(L))
