@@ -351,11 +351,10 @@ void run_small_stage(Build& b, int max_depth) {
     Kernels& k = b.kernels;
     const std::size_t candidates = 6 * std::size_t(b.small_refs);
     checked_u32(candidates, "split candidates");
-    DeviceArray below = b.allocate(candidates * 8, "candidate below masks");
-    DeviceArray above = b.allocate(candidates * 8, "candidate above masks");
+    DeviceArray side_masks = b.allocate(candidates * 16, "candidate below/above masks");
     enqueue_kernel(q, k.split_masks, b.small_refs, b.small_refs, b.small_ref_box.buffer(),
                    b.small_ref_root.buffer(), b.root_ref_start.buffer(), b.root_ref_count.buffer(),
-                   below.buffer(), above.buffer());
+                   side_masks.buffer());
 
     SmallLevel level = std::move(b.small_first);
     cl_uint nodes = b.small_roots;
@@ -367,7 +366,7 @@ void run_small_stage(Build& b, int max_depth) {
         DeviceArray split_rank = b.allocate((std::size_t(nodes) + 1) * 4, "small split ranks");
         enqueue_kernel(q, k.split_small, nodes, nodes, level.box.buffer(), level.mask.buffer(),
                        level.root.buffer(), level.depth.buffer(), b.small_ref_box.buffer(),
-                       b.root_ref_start.buffer(), below.buffer(), above.buffer(),
+                       b.root_ref_start.buffer(), side_masks.buffer(),
                        cl_float(b.params.costs.traversal), cl_float(b.params.costs.intersection),
                        cl_float(b.params.empty_bonus), cl_uint(max_depth), split_axis.buffer(),
                        split_pos.buffer(), child_mask.buffer(), split_rank.buffer());
