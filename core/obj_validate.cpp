@@ -114,6 +114,9 @@ bool is_plain_float(std::string_view s) {
         long exponent = 0;
         for (; i < n && s[i] >= '0' && s[i] <= '9'; ++i)
             if (exponent < 100000) exponent = exponent * 10 + (s[i] - '0');
+        // A saturated exponent is not the number's: 100k zeros after the point could then hide
+        // an exponent of a million. Such a number takes the exact path.
+        if (exponent >= 100000) return false;
         magnitude += negative ? -exponent : exponent;
     }
     return i == n && (!seen_significant || magnitude < 37);
@@ -288,7 +291,9 @@ class ObjScanner {
             return "face " + std::string(singular(attribute)) + " index " + std::to_string(index);
         };
         if (index == 0) fail(what() + " is invalid: OBJ indices start at 1");
-        if (index < 0 && static_cast<unsigned long long>(-index) > defined)
+        // The magnitude in unsigned arithmetic: -index overflows for the most negative index.
+        const unsigned long long magnitude = 0ULL - static_cast<unsigned long long>(index);
+        if (index < 0 && magnitude > defined)
             fail(what() + " reaches before the first " + singular(attribute) + ": only " +
                  std::to_string(defined) + " " + plural(attribute) +
                  " are defined before this line");

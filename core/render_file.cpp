@@ -18,6 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/camera.h"
 #include "core/error.h"
 
 namespace kdray {
@@ -118,6 +119,17 @@ class RenderFileParser {
         return static_cast<int>(v);
     }
 
+    static bool finite(const Vec3& v) {
+        return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+    }
+
+    /// True when `v` normalises to a finite unit vector in float: its squared length neither
+    /// overflows nor underflows to zero.
+    static bool normalizable(const Vec3& v) {
+        const float squared = dot(v, v);
+        return finite(v) && squared > 0.0f && std::isfinite(squared);
+    }
+
     Vec3 vec3(const json& value, const std::string& path) const {
         if (!value.is_array() || value.size() != 3) fail(path, "must be an array of 3 numbers");
         return {number(value[0], path + "[0]"), number(value[1], path + "[1]"),
@@ -149,9 +161,25 @@ class RenderFileParser {
         const Vec3 view = camera.look_at - camera.position;
         if (view == Vec3{0, 0, 0})
             fail(join(path, "look_at"), "must differ from the camera position");
-        if (length(camera.up) == 0.0f) fail(join(path, "up"), "must not be the zero vector");
-        if (length(cross(normalize(view), normalize(camera.up))) < 1e-6f)
+        // Finite coordinates can still give no basis in float: look_at - position may overflow
+        // (-3e38 to 3e38), and a vector whose squared length overflows or underflows normalises
+        // to NaN or 0. Every such camera rendered an image of NaN rays without a word.
+        if (!normalizable(view))
+            fail(join(path, "look_at"),
+                 "is too far from or too close to the camera position: look_at - position "
+                 "cannot be normalised in 32-bit floats");
+        if (camera.up == Vec3{0, 0, 0}) fail(join(path, "up"), "must not be the zero vector");
+        if (!normalizable(camera.up))
+            fail(join(path, "up"), "is too long or too short to be normalised in 32-bit floats");
+        // `!(... >= ...)` so that a NaN can never pass.
+        if (!(length(cross(normalize(view), normalize(camera.up))) >= 1e-6f))
             fail(join(path, "up"), "is parallel to the view direction (look_at - position)");
+        // The basis exactly as the camera computes it (camera.cpp), which must be finite.
+        const CameraRays rays(camera, 1, 1);
+        if (!finite(rays.forward) || !finite(rays.right) || !finite(rays.up))
+            fail(join(path, "up"),
+                 "gives no camera basis in 32-bit floats with this view direction; scale up "
+                 "and look_at - position to ordinary lengths");
         return camera;
     }
 
@@ -223,8 +251,12 @@ class RenderFileParser {
                 check_fields(l, path, {"type", "direction", "irradiance"});
                 if (present(l, "direction"))
                     light.direction = vec3(l["direction"], path + ".direction");
-                if (length(light.direction) == 0.0f)
+                if (light.direction == Vec3{0, 0, 0})
                     fail(path + ".direction", "must not be the zero vector");
+                // [1e30, 0, 0] has a squared length of inf and normalised to [0, 0, 0].
+                if (!normalizable(light.direction))
+                    fail(path + ".direction",
+                         "is too long or too short to be normalised in 32-bit floats");
                 if (present(l, "irradiance"))
                     light.intensity = vec3(l["irradiance"], path + ".irradiance");
             }

@@ -242,6 +242,25 @@ TEST_CASE("bad input fails with the file, the line and the problem") {
     }
 }
 
+TEST_CASE("inputs found by fuzzing (tests/fuzz) fail with their line") {
+    const std::string tri = kTriangleVertices;
+    // The most negative 64-bit index: the pre-scan negated it to compare it with the vertex
+    // count, which is signed overflow (UBSan stopped fuzz_obj on it). Any other big negative
+    // index was fine; only this one value has no positive counterpart.
+    CHECK(load_error(tri + "f -9223372036854775808 1 2\n")
+              .find("bad.obj:4: face vertex index -9223372036854775808 reaches before the first "
+                    "vertex") != std::string::npos);
+    // 99,990 zeros after the point, then an exponent of 1,000,040: the value is 1e900049. The
+    // pre-scan's fast path capped the exponent at 100000 and so saw 1e9, let the number through,
+    // and only the later finite check caught it, without the line. Zeros that cancel a capped
+    // exponent are the whole trick; a shorter number cannot do it.
+    std::string huge(2 + 99990, '0');
+    huge[1] = '.';
+    huge += "1e1000040";
+    CHECK(load_error("v " + huge + " 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+              .find("bad.obj:1: vertex coordinate '0.000") != std::string::npos);
+}
+
 TEST_CASE("a missing or unreadable file fails with the reason") {
     const fs::path missing = fs::temp_directory_path() / "kdray_no_such_file.obj";
     CHECK_THROWS_WITH_AS(load_obj(missing),

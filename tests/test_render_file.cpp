@@ -166,6 +166,46 @@ TEST_CASE("every error names the file and the field") {
     }
 }
 
+TEST_CASE("cameras and lights with finite numbers but no basis in float are errors") {
+    // Each of these used to be accepted and rendered an image of NaN (or zero-direction) rays
+    // without a word: every coordinate is a finite float, but the vectors the camera model
+    // normalises are not normalisable in 32-bit floats.
+    struct Case {
+        const char* why;
+        const char* text;
+        const char* message;  // after "scene/render.json: "
+    };
+    const Case cases[] = {
+        {"look_at - position overflows to inf",
+         R"({"camera": {"position": [-3e38, 0, 0], "look_at": [3e38, 0, 0]}})",
+         "field 'camera.look_at' is too far from or too close to the camera position"},
+        {"the view vector's squared length underflows to 0, so 1/length is inf",
+         R"({"camera": {"position": [0, 0, 1e-30], "look_at": [0, 0, 0]}})",
+         "field 'camera.look_at' is too far from or too close to the camera position"},
+        {"the same in a keyframe, whose path names the key",
+         R"({"camera": [{"frame": 0}, {"frame": 5, "position": [0, 0, 1e-30], "look_at": [0, 0, 0]}]})",
+         "field 'camera[1].look_at' is too far from or too close"},
+        {"up's squared length overflows: normalised to 0, it looked parallel to everything",
+         R"({"camera": {"up": [0, 1e30, 0]}})",
+         "field 'camera.up' is too long or too short to be normalised"},
+        {"up's squared length underflows: the old test called it the zero vector",
+         R"({"camera": {"up": [0, 1e-30, 0]}})",
+         "field 'camera.up' is too long or too short to be normalised"},
+        {"a directional light's [1e30, 0, 0] normalised to [0, 0, 0]",
+         R"({"lights": [{"type": "directional", "direction": [1e30, 0, 0]}]})",
+         "field 'lights[0].direction' is too long or too short to be normalised"},
+    };
+    for (const Case& c : cases) {
+        CAPTURE(c.why);
+        CHECK(parse_error(c.text).find(std::string("scene/render.json: ") + c.message) == 0);
+    }
+    // Large and small, but normalisable: still accepted.
+    CHECK(
+        parse_error(
+            R"({"camera": {"position": [0, 0, 1e18], "look_at": [0, 0, 0], "up": [0, 1e-18, 0]}})")
+            .empty());
+}
+
 TEST_CASE("load_render_file reads files and names the missing one") {
     const fs::path missing = fs::temp_directory_path() / "kdray_no_such_render.json";
     CHECK_THROWS_WITH_AS(load_render_file(missing),
