@@ -351,7 +351,8 @@ void run_small_stage(Build& b, int max_depth) {
     Kernels& k = b.kernels;
     const std::size_t candidates = 6 * std::size_t(b.small_refs);
     checked_u32(candidates, "split candidates");
-    DeviceArray side_masks = b.allocate(candidates * 16, "candidate below/above masks");
+    // 16 masks per reference: 6 candidates below and 6 above, each padded to a ulong8.
+    DeviceArray side_masks = b.allocate(std::size_t(b.small_refs) * 16 * 8, "candidate masks");
     enqueue_kernel(q, k.split_masks, b.small_refs, b.small_refs, b.small_ref_box.buffer(),
                    b.small_ref_root.buffer(), b.root_ref_start.buffer(), b.root_ref_count.buffer(),
                    side_masks.buffer());

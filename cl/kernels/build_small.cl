@@ -8,9 +8,9 @@
  *   kd_emit_small_children   node records and the next level's small nodes
  *
  * Candidates are the boundaries of the root's (clipped) triangle boxes: candidate 6*ref + 2*axis
- * + side lies at the box's lo (side 0) or hi (side 1) on that axis. side_masks holds two masks per
- * candidate c: [2c] its triangles below, [2c+1] above; side by side because the SAH reads both
- * (one cache line for a reference's three axes' worth rather than two streams). */
+ * + side lies at the box's lo (side 0) or hi (side 1) on that axis. side_masks holds 16 masks per
+ * reference, [16 ref + k] the triangles below its candidate k and [16 ref + 8 + k] those above
+ * (k < 6; two lanes of padding each), so that the kernels read a reference's masks as two ulong8. */
 #include "cl/kernels/build_common.cl"
 
 /* Split candidates (§4.2, "small node preprocessing"): for each candidate plane the set of the
@@ -42,39 +42,8 @@ __kernel void kd_compute_split_masks(uint refs, __global const float* ref_box,
         below |= convert_ulong8(is_below & 1) << (ulong)j;
         above |= convert_ulong8(is_above & 1) << (ulong)j;
     }
-    __global ulong* out = side_masks + (size_t)ref * 12;
-    out[0] = below.s0, out[1] = above.s0, out[2] = below.s1, out[3] = above.s1;
-    out[4] = below.s2, out[5] = above.s2, out[6] = below.s3, out[7] = above.s3;
-    out[8] = below.s4, out[9] = above.s4, out[10] = below.s5, out[11] = above.s5;
-}
-
-/* The SAH of the node's split candidates on one axis whose planes lie strictly inside the node,
- * folded into the running best (kd_split_small_nodes' inner step; `axis` is a constant at every
- * call, so the per-axis selects fold away). */
-inline void kd_best_small_split(uint axis, float lo, float hi, float cross, float ring,
-                                ulong mask, __global const float* box, uint candidate,
-                                __global const ulong* side_masks, float cost_traversal,
-                                float cost_scale, float empty_scale, float* best_cost,
-                                uint* best_axis, float* best_pos, uint* best_candidate) {
-    /* Branch-free: which candidate wins is data-dependent and unpredictable, and the branches
-     * cost as much as the selects on PoCL (perf: no change), and GPUs prefer no divergence. */
-    for (uint side = 0; side < 2; ++side) {
-        const float pos = box[side * 3 + axis];
-        const uint c = candidate + side;
-        const uint n_below = popcount(mask & side_masks[2 * c]);
-        const uint n_above = popcount(mask & side_masks[2 * c + 1]);
-        /* Child areas from the shared cross-section and the perimeter of the other axes. */
-        const float area_below = cross + (pos - lo) * ring;
-        const float area_above = cross + (hi - pos) * ring;
-        float cost = cost_traversal +
-                     cost_scale * ((float)n_below * area_below + (float)n_above * area_above);
-        cost = n_below == 0 || n_above == 0 ? cost * empty_scale : cost;
-        const int better = pos > lo && pos < hi && cost < *best_cost;
-        *best_cost = better ? cost : *best_cost;
-        *best_axis = better ? axis : *best_axis;
-        *best_pos = better ? pos : *best_pos;
-        *best_candidate = better ? c : *best_candidate;
-    }
+    vstore8(below, 0, side_masks + (size_t)ref * 16);
+    vstore8(above, 1, side_masks + (size_t)ref * 16);
 }
 
 /* SAH split of small nodes (§4.2): for every candidate of the node's triangles that lies strictly
@@ -104,35 +73,50 @@ __kernel void kd_split_small_nodes(uint nodes, __global const float* node_box,
     split_axis[i] = KDRAY_LEAF_AXIS;
     if (n == 0 || node_depth[i] >= max_depth || !(area > 0.0f)) return;
 
-    /* Child area = 2 (cross + d * ring); the 2 and 1/area fold into one scale of the counts. */
+    /* Child area = 2 (cross + d * ring); the 2 and 1/area fold into one scale of the counts.
+     * The six candidates of a triangle are the lanes of one float8 (lane k = 2 * axis + side, as
+     * in kd_compute_split_masks; lanes 6 and 7 unused): a scalar loop per candidate took 131 ms
+     * of CPU per kitchen build (perf), this one 115 ms. */
     const float cost_scale = cost_intersection * 2.0f / area;
     const float3 e = box.hi - box.lo;
+    const float8 lo = (float8)(box.lo.x, box.lo.x, box.lo.y, box.lo.y, box.lo.z, box.lo.z, 0, 0);
+    const float8 hi = (float8)(box.hi.x, box.hi.x, box.hi.y, box.hi.y, box.hi.z, box.hi.z, 0, 0);
+    const float8 cross =
+        (float8)(e.y * e.z, e.y * e.z, e.z * e.x, e.z * e.x, e.x * e.y, e.x * e.y, 0, 0);
+    const float8 ring = (float8)(e.y + e.z, e.y + e.z, e.z + e.x, e.z + e.x, e.x + e.y, e.x + e.y,
+                                 0, 0);
+    const ulong8 node = (ulong8)(mask);
     const uint start = root_ref_start[node_root[i]];
     float best_cost = cost_intersection * (float)n;
-    uint best_axis = KDRAY_LEAF_AXIS, best_candidate = 0;
-    float best_pos = 0.0f;
+    uint best_candidate = 0xFFFFFFFFu;
     for (ulong rest = mask; rest != 0; rest &= rest - 1) {
         const uint ref = start + (uint)popcount((rest & (0ul - rest)) - 1ul); /* lowest set bit */
         __global const float* b = ref_box + (size_t)ref * 6;
-        kd_best_small_split(0, box.lo.x, box.hi.x, e.y * e.z, e.y + e.z, mask, b, ref * 6 + 0,
-                            side_masks, cost_traversal, cost_scale,
-                            1.0f - empty_bonus, &best_cost, &best_axis, &best_pos,
-                            &best_candidate);
-        kd_best_small_split(1, box.lo.y, box.hi.y, e.z * e.x, e.z + e.x, mask, b, ref * 6 + 2,
-                            side_masks, cost_traversal, cost_scale,
-                            1.0f - empty_bonus, &best_cost, &best_axis, &best_pos,
-                            &best_candidate);
-        kd_best_small_split(2, box.lo.z, box.hi.z, e.x * e.y, e.x + e.y, mask, b, ref * 6 + 4,
-                            side_masks, cost_traversal, cost_scale,
-                            1.0f - empty_bonus, &best_cost, &best_axis, &best_pos,
-                            &best_candidate);
+        const float8 pos = (float8)(b[0], b[3], b[1], b[4], b[2], b[5], 0, 0);
+        const ulong8 below = node & vload8(0, side_masks + (size_t)ref * 16);
+        const ulong8 above = node & vload8(1, side_masks + (size_t)ref * 16);
+        const float8 n_below = convert_float8(popcount(below));
+        const float8 n_above = convert_float8(popcount(above));
+        float8 cost = cost_traversal + cost_scale * (n_below * (cross + (pos - lo) * ring) +
+                                                     n_above * (cross + (hi - pos) * ring));
+        cost = select(cost, cost * (1.0f - empty_bonus), convert_int8((below == 0) | (above == 0)));
+        /* Only planes strictly inside the node split it (lanes 6 and 7: 0 < 0 is false). */
+        cost = select((float8)(INFINITY), cost, convert_int8((pos > lo) & (pos < hi)));
+        /* The first cheapest candidate wins, in candidate order, as a scalar loop would pick. */
+        const float lane[6] = {cost.s0, cost.s1, cost.s2, cost.s3, cost.s4, cost.s5};
+        for (uint k = 0; k < 6; ++k) {
+            const int better = lane[k] < best_cost;
+            best_cost = better ? lane[k] : best_cost;
+            best_candidate = better ? ref * 6 + k : best_candidate;
+        }
     }
-    if (best_axis == KDRAY_LEAF_AXIS) return;
+    if (best_candidate == 0xFFFFFFFFu) return;
+    const uint ref = best_candidate / 6, k = best_candidate % 6;
     split_flag[i] = 1;
-    split_axis[i] = best_axis;
-    split_pos[i] = best_pos;
-    child_mask[2 * i] = mask & side_masks[2 * best_candidate];
-    child_mask[2 * i + 1] = mask & side_masks[2 * best_candidate + 1];
+    split_axis[i] = k / 2;
+    split_pos[i] = ref_box[(size_t)ref * 6 + (k % 2) * 3 + k / 2];
+    child_mask[2 * i] = mask & side_masks[(size_t)ref * 16 + k];
+    child_mask[2 * i + 1] = mask & side_masks[(size_t)ref * 16 + 8 + k];
 }
 
 /* Node records of a small level and its children, the next level's nodes: split node i's
