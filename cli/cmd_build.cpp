@@ -15,6 +15,7 @@ int run_build(const BuildCommand& command) {
     Scene scene = load_obj(command.scene);
     DeviceSession session(command.builder.device);
     TreeBuilder builder(command.builder, session);
+    builder.prepare();
     BuiltTree built = builder.build(scene);
     std::vector<double> samples;
     if (command.repeat > 1) {

@@ -143,7 +143,8 @@ int run_render(const RenderCommand& command) {
     if (!command.render_file.empty()) settings = load_render_file(command.render_file);
     DeviceSession session(command.builder.device);
     TreeBuilder builder(command.builder, session);
-    if (command.tracer == "opencl" || command.builder.builder == "opencl") session.device();
+    if (command.tracer == "opencl") session.device();
+    builder.prepare();
     RenderRun run{command, inputs, settings, command.output_dir, session, builder, {}};
     create_output_dir(run.out_dir);
     const bool progress = !command.quiet && ::isatty(STDERR_FILENO);

@@ -10,6 +10,10 @@ namespace kdray::cli {
 TreeBuilder::TreeBuilder(BuilderOptions options, DeviceSession& session)
     : options_(std::move(options)), session_(session) {}
 
+void TreeBuilder::prepare() {
+    if (options_.builder == "opencl") prepare_opencl_builder(session_.device(), options_.params);
+}
+
 std::string TreeBuilder::description() {
     if (options_.builder == "reference") return "reference (CPU, full SAH)";
     return "opencl on " + session_.device().info().name;

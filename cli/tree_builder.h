@@ -20,6 +20,9 @@ class TreeBuilder {
   public:
     TreeBuilder(BuilderOptions options, DeviceSession& session);
 
+    /// Opens the device and builds the builder's programs now, so that no build's time includes
+    /// their compilation.
+    void prepare();
     BuiltTree build(const Scene& scene);
     /// "reference (CPU, full SAH)" or "opencl on <device name>"; opens the device if needed.
     std::string description();
