@@ -11,6 +11,13 @@
 
 namespace kdray {
 
+/// Builds the render program for the effects combination `effects` (KDRAY_EFFECT_* bits, as
+/// Effects::bits() gives them) and runs its kernel once on an empty image, so that the program
+/// build and the device compiler's first-launch work (PoCL compiles a kernel per work-group size
+/// on its first launch) are done before the first frame is timed. Later calls, and frames with
+/// these effects, reuse what it built.
+void prepare_opencl_renderer(ClDevice& device, kd_u32 effects);
+
 /// Renders one frame. The render program is built once per effects combination and reused.
 FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& scene,
                           const RenderInputs& inputs);

@@ -147,3 +147,33 @@ TEST_CASE("opencl render: a program is built once per effects combination") {
     render_opencl(test::opencl_test_device(), tree, scene, inputs);
     CHECK(program_build_count() == builds);
 }
+
+TEST_CASE("opencl render: prepare_opencl_renderer builds the program that frames then reuse") {
+    // Effects 3 (shadows and reflection) is a combination no other test renders, so the first
+    // prepare must build it; the second prepare and the frame must not build again.
+    Scene scene = test::random_triangles(50, 23);
+    Material mirror;
+    mirror.name = "mirror";
+    mirror.illum = 3;
+    mirror.specular = {0.9f, 0.9f, 0.9f};
+    scene.materials.push_back(mirror);
+    scene.material_ids[0] = 1;
+    RenderSettings settings = small_settings(8, 8);
+    settings.max_depth = 2;
+    settings.lights.push_back(Light{Light::Type::point, {0.5f, 3.0f, 0.5f}, {}, {5, 5, 5}});
+    const RenderInputs inputs = prepare_render(scene, settings, skew_camera(scene), 0);
+    REQUIRE(inputs.effects.bits() == (KDRAY_EFFECT_SHADOWS | KDRAY_EFFECT_REFLECTION));
+
+    const int before = program_build_count();
+    prepare_opencl_renderer(test::opencl_test_device(), inputs.effects.bits());
+    CHECK(program_build_count() == before + 1);
+    prepare_opencl_renderer(test::opencl_test_device(), inputs.effects.bits());
+    const KdTree tree = build_reference(scene);
+    const FrameResult f = render_opencl(test::opencl_test_device(), tree, scene, inputs);
+    CHECK(program_build_count() == before + 1);
+    CHECK(f.rays.primary == 64u);
+    // The prepared program renders what the reference renders.
+    const FrameResult host = render_reference(tree, scene, inputs, 1);
+    for (std::size_t i = 0; i < host.hits.hits.size(); ++i)
+        CHECK(test::hits_agree(f.hits.hits[i], host.hits.hits[i]));
+}
