@@ -9,13 +9,13 @@ Writes docs/bench-build.md and docs/bench-build.csv (or --out) with the machine 
   scripts/bench_build.py --kdray build/kdray [--repeat 5] [--no-reference] [--scenes SUBSTR]
 """
 import argparse
-import csv
 import datetime
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import ROOT, benchmark_scenes, build_peer, machine_description, run_json  # noqa
+from bench_common import (ROOT, benchmark_scenes, build_peer, machine_description, run_json,  # noqa
+                          write_report)
 
 
 def main():
@@ -82,14 +82,7 @@ def main():
             f"{ratio(r.get('reference_ms'), r['opencl_ms'])} | {fmt(r['opencl_sah'])} | "
             f"{fmt(r.get('reference_sah'))} | {ratio(r['opencl_sah'], r.get('reference_sah'))} | "
             f"{r['opencl_nodes']} | {fmt(r.get('opencl_bytes_per_tri'), 0)} |")
-    os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    with open(args.out + ".md", "w") as f:
-        f.write("\n".join(lines) + "\n")
-    with open(args.out + ".csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=sorted({k for r in rows for k in r}))
-        writer.writeheader()
-        writer.writerows(rows)
-    print("\n".join(lines))
+    write_report(args.out, lines, rows)
     return 0
 
 

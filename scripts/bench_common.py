@@ -1,5 +1,6 @@
 """Helpers the benchmark scripts share: the scene list, running kdray and the Embree peer, and a
 description of the machine the figures were taken on."""
+import csv
 import json
 import os
 import platform
@@ -75,3 +76,15 @@ def machine_description(kdray):
 
 def median(values):
     return statistics.median(values) if values else float("nan")
+
+
+def write_report(out, lines, rows):
+    """Writes OUT.md (the Markdown lines) and OUT.csv (the rows), and prints the Markdown."""
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    with open(out + ".md", "w") as f:
+        f.write("\n".join(lines) + "\n")
+    with open(out + ".csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=sorted({k for r in rows for k in r}))
+        writer.writeheader()
+        writer.writerows(rows)
+    print("\n".join(lines))

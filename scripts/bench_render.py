@@ -13,7 +13,6 @@ Writes docs/bench-render.md and .csv with the machine it ran on.
   scripts/bench_render.py --kdray build/kdray [--repeat 3] [--scenes SUBSTR]
 """
 import argparse
-import csv
 import datetime
 import json
 import os
@@ -24,7 +23,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_common import (ROOT, SHARED, benchmark_scenes, build_peer, machine_description,  # noqa
-                          median, run_json)
+                          median, run_json, write_report)
 
 THREADS = os.cpu_count()
 
@@ -200,15 +199,8 @@ def main():
     lines += ["", "## Glass room (testdata/cornell), 640x480, 1 spp, shadows + reflection + refraction",
               "", f"Frame {glass['frame_ms']:.0f} ms (build {glass['build_ms']:.1f} ms, trace "
               f"{glass['trace_ms']:.0f} ms); rays {json.dumps(glass['rays'])}."]
-    os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    with open(args.out + ".md", "w") as f:
-        f.write("\n".join(lines) + "\n")
-    with open(args.out + ".csv", "w", newline="") as f:
-        rows = [dict(kind="primary", **r) for r in prim] + [dict(kind="dynamic", **r) for r in dyn]
-        writer = csv.DictWriter(f, fieldnames=sorted({k for r in rows for k in r}))
-        writer.writeheader()
-        writer.writerows(rows)
-    print("\n".join(lines))
+    rows = [dict(kind="primary", **r) for r in prim] + [dict(kind="dynamic", **r) for r in dyn]
+    write_report(args.out, lines, rows)
     return 0
 
 
