@@ -117,8 +117,8 @@ std::vector<ClDeviceInfo> list_cl_devices() {
 std::string describe_cl_devices(const std::vector<ClDeviceInfo>& devices) {
     std::string s;
     for (const ClDeviceInfo& d : devices)
-        s += "  " + std::to_string(d.index) + ": " + d.name + " (" + d.vendor + ", " + d.type +
-             ", " + d.version + ")\n";
+        s += (s.empty() ? "" : "; ") + std::to_string(d.index) + ": " + d.name + " (" + d.vendor +
+             ", " + d.type + ", " + d.version + ")";
     return s;
 }
 
@@ -149,7 +149,7 @@ ClDevice::ClDevice(const std::string& selector) {
         }
         if (!chosen)
             throw Error("no OpenCL device matches '" + selector +
-                        "' (give an index or a part of the name); the devices are:\n" +
+                        "' (give an index or a part of the name); the devices are " +
                         describe_cl_devices(infos(found)));
         device_ = chosen->device;
         info_ = chosen->info;

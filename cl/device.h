@@ -55,7 +55,7 @@ class ClDevice {
     ClDeviceInfo info_;
 };
 
-/// A line per device for messages and `kdray stats`: "0: NAME (VENDOR, TYPE, VERSION)".
+/// The devices on one line, for error messages: "0: NAME (VENDOR, TYPE, VERSION); 1: ...".
 std::string describe_cl_devices(const std::vector<ClDeviceInfo>& devices);
 
 }  // namespace kdray

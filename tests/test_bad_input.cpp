@@ -271,12 +271,9 @@ TEST_CASE("an OpenCL device that does not exist: exit 1 and the devices listed")
     fs::remove_all(dir);
 }
 
-// May fail: the message is not one line. cl/device.cpp's ClDevice throws "no OpenCL device
-// matches '99' ...; the devices are:\n" followed by describe_cl_devices(), one line per device
-// that itself ends in '\n', and cli/main.cpp adds another: stderr has 1 + devices + 1 lines, the
-// last one empty. Every other error is one line, which scripts that grep `kdray: error:` rely on.
-// The owners of cl/ and cli/ decide the fix (e.g. the devices joined with "; " on the one line).
-TEST_CASE("an OpenCL device that does not exist is one error line" * doctest::may_fail()) {
+// The device list once came one device per line, with a trailing newline: every other error is
+// one line, which scripts that grep `kdray: error:` rely on. The devices now share the line.
+TEST_CASE("an OpenCL device that does not exist is one error line") {
     const fs::path dir = fresh_temp_dir("bad-input-device-line");
     const fs::path obj = write_text_file(dir / "scene.obj", kTriangleObj);
     check_error(run_kdray({"build", obj.string(), "--device", "99"}), 1, {"'99'", "0: "});
