@@ -28,4 +28,13 @@ void prepare_opencl_builder(ClDevice& device, const BuildParams& params = {});
 KdTree build_opencl(ClDevice& device, const Scene& scene, const BuildParams& params = {},
                     BuildReport* report = nullptr);
 
+namespace detail {
+/// build_opencl with the small stage's first budget of node records given: `scale` * (n + 1)
+/// for a small root of n references (build_opencl uses 10). A subtree that outgrows it is built
+/// again in a second pass; tests pass 1 so that most subtrees take that path.
+KdTree build_opencl_with_subtree_budget(ClDevice& device, const Scene& scene,
+                                        const BuildParams& params, unsigned scale,
+                                        BuildReport* report = nullptr);
+}  // namespace detail
+
 }  // namespace kdray

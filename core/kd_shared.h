@@ -208,13 +208,14 @@ static_assert(sizeof(KdRayCounts) == 16, "KdRayCounts is 16 bytes on every devic
 /* KdBuildNode — 32 bytes. A node of the OpenCL builder (Zhou et al. 2008) before its output stage
  * lays the tree out in preorder. Node ids are handed out level by level, so a child's id is always
  * larger than its parent's.
- *   axis         inner: split axis 0/1/2; leaf: KDRAY_LEAF_AXIS.
+ *   axis         inner: split axis 0/1/2; leaf: KDRAY_LEAF_AXIS; small root: 4.
  *   split        inner: split plane position.
  *   child[2]     inner: node ids of the below and above children.
  *   leaf_count   leaf: number of triangles.
- *   leaf_first   leaf with mask 0: first entry of its run in the builder's leaf reference store;
- *                leaf with mask != 0: index of the small root whose triangles the mask selects.
- *   mask_lo/hi   leaf of the small-node stage: bit i selects the small root's i-th triangle. */
+ *   leaf_first   leaf: first entry of its run in the builder's leaf reference store.
+ *   mask_lo/hi   unused (0).
+ * A small root of the small-node stage has axis 4 (KDRAY_SMALL_ROOT_AXIS in build_common.cl) and
+ * leaf_first its small root index: that stage writes its subtree in records of its own. */
 typedef struct KdBuildNode {
     kd_u32 axis;
     kd_f32 split;

@@ -13,6 +13,17 @@
 #define KDRAY_BELOW 1u
 #define KDRAY_ABOVE 2u
 
+/* KdBuildNode.axis of a small root: kd_build_small_subtrees writes its subtree, and leaf_first
+ * is the small root's index. */
+#define KDRAY_SMALL_ROOT_AXIS 4u
+
+/* The small stage's node records (uint4 each), in preorder within their small root's subtree:
+ *   x  bits 0-1: split axis, or KDRAY_LEAF_AXIS; bits 2-31: inner: the above child's index in the
+ *      subtree; leaf: its first leaf reference, counted from the subtree's first
+ *   y  inner: split position (float bits); leaf: triangle count
+ *   z  leaf: mask bits 0-31 over the small root's references (bit i: its i-th triangle)
+ *   w  leaf: mask bits 32-63 */
+
 typedef struct KdBox {
     float3 lo, hi;
 } KdBox;
@@ -119,7 +130,7 @@ inline uint kd_find_segment(__global const uint* starts, uint n, uint x) {
     return lo;
 }
 
-inline KdBuildNode kd_build_leaf(uint count, uint first, ulong mask) {
+inline KdBuildNode kd_build_leaf(uint count, uint first) {
     KdBuildNode n;
     n.axis = KDRAY_LEAF_AXIS;
     n.split = 0.0f;
@@ -127,8 +138,15 @@ inline KdBuildNode kd_build_leaf(uint count, uint first, ulong mask) {
     n.child[1] = 0;
     n.leaf_count = count;
     n.leaf_first = first;
-    n.mask_lo = (uint)mask;
-    n.mask_hi = (uint)(mask >> 32);
+    n.mask_lo = 0;
+    n.mask_hi = 0;
+    return n;
+}
+
+/* The record of a small root (§4.2): its subtree is the small stage's, in the records below. */
+inline KdBuildNode kd_build_small_root(uint root) {
+    KdBuildNode n = kd_build_leaf(0, root);
+    n.axis = KDRAY_SMALL_ROOT_AXIS;
     return n;
 }
 

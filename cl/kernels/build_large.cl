@@ -201,8 +201,7 @@ __kernel void kd_emit_large_children(
     __global KdBuildNode* records, __global float* next_box, __global uint* next_ref_start,
     __global uint* next_ref_count, __global uint* next_chunk_start, __global uint* next_node_id,
     __global uint* root_ref_start, __global uint* root_ref_count, __global float* small_box,
-    __global ulong* small_mask, __global uint* small_root, __global uint* small_node_id,
-    __global uint* small_depth) {
+    __global uint* small_node_id, __global uint* small_depth) {
     const uint i = get_global_id(0);
     if (i >= nodes) return;
     const uint slots = 2 * nodes;
@@ -216,7 +215,7 @@ __kernel void kd_emit_large_children(
     if (axis == KDRAY_LEAF_AXIS) {
         records[node_id[i]] = kd_build_leaf(
             node_ref_count[i],
-            leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i), 0);
+            leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i));
         return;
     }
     const float split = split_pos[i];
@@ -240,14 +239,12 @@ __kernel void kd_emit_large_children(
             root_ref_start[q] =
                 small_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s);
             root_ref_count[q] = n;
-            /* A small root is the first small node of its subtree: all its triangles. */
             kd_store_box(small_box, q, child);
-            small_mask[q] = n >= 64 ? ~0ul : ((1ul << n) - 1ul);
-            small_root[q] = q;
             small_node_id[q] = id;
             small_depth[q] = child_depth;
+            records[id] = kd_build_small_root(q);
         } else {
-            records[id] = kd_build_leaf(0, 0, 0);
+            records[id] = kd_build_leaf(0, 0);
         }
     }
     records[node_id[i]] = kd_build_inner(axis, split, child_id[0], child_id[1]);

@@ -1,21 +1,28 @@
 /* build_output.cl — the output stage of Zhou et al. (2008), §4.3: the builder's node records
  * become the preorder KdNode array and leaf index list of core/kd_shared.h.
  *
- *   kd_size_subtrees    bottom up, one launch per batch of node ids (children are always in a
- *                       later batch than their parent): nodes and leaf references per subtree
- *   kd_place_subtrees   top down, one launch per batch: each child's preorder position (below
- *                       child right after its parent, above child after the below subtree) and
- *                       its first leaf index
- *   kd_write_nodes      every node at once: the KdNode and its leaf's triangle ids */
+ *   kd_size_subtrees         bottom up, one launch per batch of node ids (children are always in a
+ *                            later batch than their parent): nodes and leaf references per subtree
+ *                            (a small root's come from the small stage)
+ *   kd_place_subtrees        top down, one launch per batch: each child's preorder position (below
+ *                            child right after its parent, above child after the below subtree)
+ *                            and its first leaf index
+ *   kd_write_nodes           the large stage's nodes: KdNode and leaf triangle ids
+ *   kd_write_small_subtrees  per small root: its subtree, already in preorder, moved into place */
 #include "cl/kernels/build_common.cl"
 
 __kernel void kd_size_subtrees(uint begin, uint count, __global const KdBuildNode* records,
-                               __global uint* subtree_nodes, __global uint* subtree_refs) {
+                               __global const uint* small_node_count,
+                               __global const uint* small_leaf_refs, __global uint* subtree_nodes,
+                               __global uint* subtree_refs) {
     const uint k = get_global_id(0);
     if (k >= count) return;
     const uint id = begin + k;
     const KdBuildNode n = records[id];
-    if (n.axis == KDRAY_LEAF_AXIS) {
+    if (n.axis == KDRAY_SMALL_ROOT_AXIS) {
+        subtree_nodes[id] = small_node_count[n.leaf_first];
+        subtree_refs[id] = small_leaf_refs[n.leaf_first];
+    } else if (n.axis == KDRAY_LEAF_AXIS) {
         subtree_nodes[id] = 1;
         subtree_refs[id] = n.leaf_count;
     } else {
@@ -32,7 +39,7 @@ __kernel void kd_place_subtrees(uint begin, uint count, __global const KdBuildNo
     if (k >= count) return;
     const uint id = begin + k;
     const KdBuildNode n = records[id];
-    if (n.axis == KDRAY_LEAF_AXIS) return;
+    if (n.axis == KDRAY_LEAF_AXIS || n.axis == KDRAY_SMALL_ROOT_AXIS) return;
     const uint below = n.child[0], above = n.child[1];
     position[below] = position[id] + 1;
     position[above] = position[id] + 1 + subtree_nodes[below];
@@ -40,32 +47,58 @@ __kernel void kd_place_subtrees(uint begin, uint count, __global const KdBuildNo
     leaf_position[above] = leaf_position[id] + subtree_refs[below];
 }
 
-/* Leaves of the small-node stage name their triangles by a mask over their small root's list;
- * the others by a run of the large stage's leaf store. */
+/* Nodes of the large stage; its leaves list their triangles in the builder's leaf store. */
 __kernel void kd_write_nodes(uint count, __global const KdBuildNode* records,
                              __global const uint* position, __global const uint* leaf_position,
-                             __global const uint* leaf_store, __global const uint* small_ref_tri,
-                             __global const uint* root_ref_start, __global KdNode* nodes,
+                             __global const uint* leaf_store, __global KdNode* nodes,
                              __global uint* leaf_indices) {
     const uint id = get_global_id(0);
     if (id >= count) return;
     const KdBuildNode n = records[id];
     const uint at = position[id];
+    if (n.axis == KDRAY_SMALL_ROOT_AXIS) return;
     if (n.axis != KDRAY_LEAF_AXIS) {
         nodes[at] = kd_make_inner(n.axis, n.split, position[n.child[1]]);
         return;
     }
     const uint first = leaf_position[id];
     nodes[at] = kd_make_leaf(n.leaf_count, first);
-    const ulong mask = ((ulong)n.mask_hi << 32) | (ulong)n.mask_lo;
-    if (mask != 0) {
-        const uint start = root_ref_start[n.leaf_first];
-        uint out = first;
-        for (ulong rest = mask; rest != 0; rest &= rest - 1) {
-            const uint j = (uint)popcount((rest & (0ul - rest)) - 1ul);
-            leaf_indices[out++] = small_ref_tri[start + j];
+    for (uint k = 0; k < n.leaf_count; ++k) leaf_indices[first + k] = leaf_store[n.leaf_first + k];
+}
+
+/* A small root's subtree (kd_build_small_subtrees, records described in build_common.cl) lies in
+ * preorder from the root's position on: its child indices and leaf offsets only shift by where
+ * the root and its first leaf reference landed. A leaf's mask names its small root's triangles.
+ * Subtrees that outgrew the first pass's records (first_scale per reference) are the second's. */
+__kernel void kd_write_small_subtrees(uint roots, __global const uint* root_node_id,
+                                      __global const uint* root_ref_start,
+                                      __global const uint* root_ref_count, uint first_scale,
+                                      __global const uint4* first_nodes, uint second_scale,
+                                      __global const uint4* second_nodes,
+                                      __global const uint* subtree_node_count,
+                                      __global const uint* position,
+                                      __global const uint* leaf_position,
+                                      __global const uint* small_ref_tri, __global KdNode* nodes,
+                                      __global uint* leaf_indices) {
+    const uint q = get_global_id(0);
+    if (q >= roots) return;
+    const uint start = root_ref_start[q], count = subtree_node_count[q];
+    __global const uint4* in = count <= first_scale * (root_ref_count[q] + 1)
+                                   ? first_nodes + (size_t)first_scale * (start + q)
+                                   : second_nodes + (size_t)second_scale * (start + q);
+    const uint at = position[root_node_id[q]], first = leaf_position[root_node_id[q]];
+    for (uint j = 0; j < count; ++j) {
+        const uint4 r = in[j];
+        const uint axis = r.x & 3u, offset = r.x >> 2;
+        if (axis != KDRAY_LEAF_AXIS) {
+            nodes[at + j] = kd_make_inner(axis, as_float(r.y), at + offset);
+            continue;
         }
-    } else {
-        for (uint k = 0; k < n.leaf_count; ++k) leaf_indices[first + k] = leaf_store[n.leaf_first + k];
+        nodes[at + j] = kd_make_leaf(r.y, first + offset);
+        uint out = first + offset;
+        for (ulong rest = ((ulong)r.w << 32) | (ulong)r.z; rest != 0; rest &= rest - 1) {
+            const uint i = (uint)popcount((rest & (0ul - rest)) - 1ul);
+            leaf_indices[out++] = small_ref_tri[start + i];
+        }
     }
 }

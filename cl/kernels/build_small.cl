@@ -2,10 +2,15 @@
  * at most T <= 64 triangles) is split by the full surface area heuristic, with the triangle sets
  * of a node and of each split candidate held as 64-bit masks over the root's triangle list.
  *
- *   kd_compute_split_masks   preprocessing: per candidate plane, the masks of the root's triangles
- *                            below and above it
- *   kd_split_small_nodes     per small node of a level: the cheapest candidate, or a leaf
- *   kd_emit_small_children   node records and the next level's small nodes
+ *   kd_compute_split_masks     preprocessing: per candidate plane, the masks of the root's
+ *                              triangles below and above it
+ *   kd_build_small_subtrees    per small root: its whole subtree, depth first, in preorder
+ *
+ * The paper splits the small nodes of one level at a time, with a launch per level. Here one
+ * work-item builds a root's whole subtree in one launch: the root's masks (at most 64 references
+ * of 128 bytes) stay in its cache across the subtree's levels instead of being read again by a new
+ * launch per level, and the ~20 launches, scans and read-backs of the levels are gone. The trees
+ * are the same: each node gets the same SAH decision from the same inputs.
  *
  * Candidates are the boundaries of the root's (clipped) triangle boxes: candidate 6*ref + 2*axis
  * + side lies at the box's lo (side 0) or hi (side 1) on that axis. side_masks holds 16 masks per
@@ -46,38 +51,25 @@ __kernel void kd_compute_split_masks(uint refs, __global const float* ref_box,
     vstore8(above, 1, side_masks + (size_t)ref * 16);
 }
 
-/* SAH split of small nodes (§4.2): for every candidate of the node's triangles that lies strictly
- * inside the node's box, SAH(x) = C_t + C_i (N_L SA_L + N_R SA_R) / SA, the counts by popcount of
- * the node's mask and the candidate's masks, scaled by (1 - empty_bonus) when a side is empty as
- * in the reference builder. The node becomes a leaf when C_i N is no more than the best, at the
- * depth limit, or when its box has no area. split_flag (0/1) is scanned into child positions.
+
+/* The SAH split of one small node (§4.2): for every candidate of the node's triangles that lies
+ * strictly inside the node's box, SAH(x) = C_t + C_i (N_L SA_L + N_R SA_R) / SA, the counts by
+ * popcount of the node's mask and the candidate's masks, scaled by (1 - empty_bonus) when a side
+ * is empty as in the reference builder. Returns the cheapest candidate (6 * ref + k), or
+ * KDRAY_NO_CANDIDATE when C_i N is no more than the best: the node becomes a leaf.
  *
  * Only the candidates of the node's own triangles (the set bits of its mask) are evaluated: the
  * SAH is piecewise linear between those boundaries, so its minimum lies on one of them. */
-__kernel void kd_split_small_nodes(uint nodes, __global const float* node_box,
-                                   __global const ulong* node_mask,
-                                   __global const uint* node_root, __global const uint* node_depth,
-                                   __global const float* ref_box,
-                                   __global const uint* root_ref_start,
-                                   __global const ulong* side_masks, float cost_traversal,
-                                   float cost_intersection, float empty_bonus, uint max_depth,
-                                   __global uint* split_axis, __global float* split_pos,
-                                   __global ulong* child_mask, __global uint* split_flag) {
-    const uint i = get_global_id(0);
-    if (i >= nodes) return;
-    const ulong mask = node_mask[i];
-    const uint n = popcount(mask);
-    const KdBox box = kd_load_box(node_box, i);
-    const float area = kd_box_area(box);
-    split_flag[i] = 0;
-    split_axis[i] = KDRAY_LEAF_AXIS;
-    if (n == 0 || node_depth[i] >= max_depth || !(area > 0.0f)) return;
+#define KDRAY_NO_CANDIDATE 0xFFFFFFFFu
 
+inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global const float* ref_box,
+                                __global const ulong* side_masks, float cost_traversal,
+                                float cost_intersection, float empty_bonus) {
     /* Child area = 2 (cross + d * ring); the 2 and 1/area fold into one scale of the counts.
      * The six candidates of a triangle are the lanes of one float8 (lane k = 2 * axis + side, as
      * in kd_compute_split_masks; lanes 6 and 7 unused): a scalar loop per candidate took 131 ms
      * of CPU per kitchen build (perf), this one 115 ms. */
-    const float cost_scale = cost_intersection * 2.0f / area;
+    const float cost_scale = cost_intersection * 2.0f / kd_box_area(box);
     const float3 e = box.hi - box.lo;
     const float8 lo = (float8)(box.lo.x, box.lo.x, box.lo.y, box.lo.y, box.lo.z, box.lo.z, 0, 0);
     const float8 hi = (float8)(box.hi.x, box.hi.x, box.hi.y, box.hi.y, box.hi.z, box.hi.z, 0, 0);
@@ -86,9 +78,8 @@ __kernel void kd_split_small_nodes(uint nodes, __global const float* node_box,
     const float8 ring = (float8)(e.y + e.z, e.y + e.z, e.z + e.x, e.z + e.x, e.x + e.y, e.x + e.y,
                                  0, 0);
     const ulong8 node = (ulong8)(mask);
-    const uint start = root_ref_start[node_root[i]];
-    float best_cost = cost_intersection * (float)n;
-    uint best_candidate = 0xFFFFFFFFu;
+    float best_cost = cost_intersection * (float)popcount(mask);
+    uint best_candidate = KDRAY_NO_CANDIDATE;
     for (ulong rest = mask; rest != 0; rest &= rest - 1) {
         const uint ref = start + (uint)popcount((rest & (0ul - rest)) - 1ul); /* lowest set bit */
         __global const float* b = ref_box + (size_t)ref * 6;
@@ -110,46 +101,91 @@ __kernel void kd_split_small_nodes(uint nodes, __global const float* node_box,
             best_candidate = better ? ref * 6 + k : best_candidate;
         }
     }
-    if (best_candidate == 0xFFFFFFFFu) return;
-    const uint ref = best_candidate / 6, k = best_candidate % 6;
-    split_flag[i] = 1;
-    split_axis[i] = k / 2;
-    split_pos[i] = ref_box[(size_t)ref * 6 + (k % 2) * 3 + k / 2];
-    child_mask[2 * i] = mask & side_masks[(size_t)ref * 16 + k];
-    child_mask[2 * i + 1] = mask & side_masks[(size_t)ref * 16 + 8 + k];
+    return best_candidate;
 }
 
-/* Node records of a small level and its children, the next level's nodes: split node i's
- * children are next-level nodes 2*rank(i) and 2*rank(i)+1 and get node ids from node_base. */
-__kernel void kd_emit_small_children(uint nodes, __global const float* node_box,
-                                     __global const ulong* node_mask,
-                                     __global const uint* node_root,
-                                     __global const uint* node_depth,
-                                     __global const uint* node_id, __global const uint* split_axis,
-                                     __global const float* split_pos,
-                                     __global const ulong* child_mask,
-                                     __global const uint* split_rank, uint node_base,
-                                     __global KdBuildNode* records, __global float* next_box,
-                                     __global ulong* next_mask, __global uint* next_root,
-                                     __global uint* next_depth, __global uint* next_node_id) {
-    const uint i = get_global_id(0);
-    if (i >= nodes) return;
-    const ulong mask = node_mask[i];
-    const uint axis = split_axis[i];
-    if (axis == KDRAY_LEAF_AXIS) {
-        records[node_id[i]] = kd_build_leaf(popcount(mask), node_root[i], mask);
-        return;
+/* A node waiting on the subtree builder's stack: the above child of the split node `parent`. */
+typedef struct KdPendingNode {
+    KdBox box;
+    ulong mask;
+    uint depth;
+    uint parent;
+    uint parent_axis;
+} KdPendingNode;
+
+/* Small-node stage (§4.2), one work-item per small root: split the root's subtree depth first,
+ * writing its nodes in preorder (below child right after its parent, above child after the below
+ * subtree, as the output layout wants) to the root's run of subtree_nodes, which holds
+ * budget_scale * (count + 1) records for a root of count references (the record layout is in
+ * build_common.cl; leaf offsets count from the subtree's first leaf reference). A node becomes a
+ * leaf when no split beats C_i N, at the depth limit, or when its box has no area.
+ *
+ * Outputs per root: its node and leaf reference counts. A subtree that outgrows its run is still
+ * counted, only not written. totals (zeroed by the host): [0] the stage's node count, [1] the
+ * smallest budget_scale that holds every subtree, [2] the most levels of one subtree. A second
+ * pass (first_scale != 0, with a larger budget_scale and its own subtree_nodes) builds again only
+ * the subtrees that outgrew the first pass's first_scale. */
+__kernel void kd_build_small_subtrees(
+    uint roots, __global const float* root_box, __global const uint* root_depth,
+    __global const uint* root_ref_start, __global const uint* root_ref_count,
+    __global const float* ref_box, __global const ulong* side_masks, float cost_traversal,
+    float cost_intersection, float empty_bonus, uint max_depth, uint budget_scale,
+    uint first_scale, __global uint4* subtree_nodes, __global uint* subtree_node_count,
+    __global uint* subtree_leaf_refs, __global uint* totals) {
+    const uint q = get_global_id(0);
+    if (q >= roots) return;
+    const uint start = root_ref_start[q], count = root_ref_count[q];
+    if (first_scale != 0 && subtree_node_count[q] <= first_scale * (count + 1)) return;
+    const uint budget = budget_scale * (count + 1);
+    __global uint4* out = subtree_nodes + (size_t)budget_scale * (start + q);
+    KdPendingNode stack[KDRAY_MAX_DEPTH];
+    uint top = 0;
+    KdPendingNode node;
+    node.box = kd_load_box(root_box, q);
+    node.mask = count >= 64 ? ~0ul : ((1ul << count) - 1ul);
+    node.depth = root_depth[q];
+    node.parent = KDRAY_NO_CANDIDATE;
+    uint written = 0, leaf_refs = 0, deepest = node.depth;
+    for (;;) {
+        /* The next node in preorder; an above child completes its parent's record. */
+        const uint at = written++;
+        deepest = max(deepest, node.depth);
+        if (node.parent != KDRAY_NO_CANDIDATE && node.parent < budget)
+            out[node.parent].x = node.parent_axis | (at << 2);
+        uint best = KDRAY_NO_CANDIDATE;
+        if (node.mask != 0 && node.depth < max_depth && kd_box_area(node.box) > 0.0f)
+            best = kd_best_small_split(node.box, node.mask, start, ref_box, side_masks,
+                                       cost_traversal, cost_intersection, empty_bonus);
+        if (best == KDRAY_NO_CANDIDATE) {
+            /* Leaf: its triangles are the mask's, its references the next in preorder. */
+            const uint n = popcount(node.mask);
+            if (at < budget)
+                out[at] = (uint4)(KDRAY_LEAF_AXIS | (leaf_refs << 2), n, (uint)node.mask,
+                                  (uint)(node.mask >> 32));
+            leaf_refs += n;
+            if (top == 0) break;
+            node = stack[--top];
+            continue;
+        }
+        /* Inner node: go on with the below child, keep the above child for later. */
+        const uint ref = best / 6, k = best % 6, axis = k / 2;
+        const float split = ref_box[(size_t)ref * 6 + (k % 2) * 3 + axis];
+        if (at < budget) out[at] = (uint4)(axis, as_uint(split), 0, 0);
+        KdPendingNode above;
+        above.box = kd_child_box(node.box, axis, split, 1);
+        above.mask = node.mask & side_masks[(size_t)ref * 16 + 8 + k];
+        above.depth = node.depth + 1;
+        above.parent = at;
+        above.parent_axis = axis;
+        stack[top++] = above;
+        node.box = kd_child_box(node.box, axis, split, 0);
+        node.mask &= side_masks[(size_t)ref * 16 + k];
+        node.depth += 1;
+        node.parent = KDRAY_NO_CANDIDATE;
     }
-    const KdBox box = kd_load_box(node_box, i);
-    const float split = split_pos[i];
-    const uint first = 2 * split_rank[i];
-    for (uint side = 0; side < 2; ++side) {
-        const uint j = first + side;
-        kd_store_box(next_box, j, kd_child_box(box, axis, split, side));
-        next_mask[j] = child_mask[2 * i + side];
-        next_root[j] = node_root[i];
-        next_depth[j] = node_depth[i] + 1;
-        next_node_id[j] = node_base + j;
-    }
-    records[node_id[i]] = kd_build_inner(axis, split, node_base + first, node_base + first + 1);
+    subtree_node_count[q] = written;
+    subtree_leaf_refs[q] = leaf_refs;
+    atomic_add(&totals[0], written);
+    atomic_max(&totals[1], (written + count) / (count + 1));
+    atomic_max(&totals[2], deepest - root_depth[q] + 1);
 }
