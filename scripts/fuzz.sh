@@ -17,6 +17,7 @@ case "${1:-}" in
     *) seconds=$1 ;;
 esac
 
+scripts/install-deps.sh --fuzz
 build_dir=build-fuzz
 CC=clang CXX=clang++ cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DKDRAY_FUZZ=ON -DKDRAY_BUILD_TESTS=OFF >/dev/null

@@ -3,6 +3,7 @@
 # are already installed are left alone and apt is not even asked. Runs as root, or through sudo.
 #   scripts/install-deps.sh            build + test dependencies
 #   scripts/install-deps.sh --peer     also Embree, for the reference peer in ../shared/peers/embree
+#   scripts/install-deps.sh --fuzz     also clang and its sanitizer runtimes, for scripts/fuzz.sh
 set -euo pipefail
 
 packages=(
@@ -11,9 +12,13 @@ packages=(
     libopenimageio-dev openimageio-tools
     libtinyobjloader-dev libcli11-dev nlohmann-json3-dev doctest-dev
 )
-if [[ "${1:-}" == "--peer" ]]; then
-    packages+=(libembree-dev)
-fi
+for option in "$@"; do
+    case "$option" in
+        --peer) packages+=(libembree-dev) ;;
+        --fuzz) packages+=(clang libclang-rt-dev) ;;
+        *) echo "install-deps: unknown option $option" >&2; exit 2 ;;
+    esac
+done
 
 missing=()
 for p in "${packages[@]}"; do

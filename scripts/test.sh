@@ -2,11 +2,23 @@
 # The test command: installs the dependencies, builds, and runs every test with CTest.
 # OpenCL tests run on whatever device OpenCL offers (PoCL on a CPU-only machine); they never skip.
 # Tests that need ../shared (the real scenes and the Embree peer) skip when it is absent.
+#
+#   scripts/test.sh              Release build in build/, every test
+#   scripts/test.sh --sanitize   ASan + UBSan build in build-asan/, the unit and CLI tests (the
+#                                Embree comparisons and the accuracy sweep are left to the first)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/build.sh "$@"
+exclude=()
+if [[ "${1:-}" == "--sanitize" ]]; then
+    shift
+    export KDRAY_BUILD_DIR=${KDRAY_BUILD_DIR:-build-asan}
+    scripts/build.sh -DKDRAY_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@"
+    exclude=(-E "embree_agreement|accuracy_vs_time")
+else
+    scripts/build.sh "$@"
+fi
 build_dir=${KDRAY_BUILD_DIR:-build}
 # PoCL caches compiled kernels; keep that cache somewhere writable even when $HOME is not.
 export POCL_CACHE_DIR=${POCL_CACHE_DIR:-$PWD/$build_dir/pocl-cache}
 mkdir -p "$POCL_CACHE_DIR"
-ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)"
+ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)" "${exclude[@]}"
