@@ -17,6 +17,7 @@ ClPrimitives::ClPrimitives(ClDevice& device) : device_(device) {
     scan_chunks_ = make_kernel(program, "kd_scan_chunks");
     scan_single_ = make_kernel(program, "kd_scan_single");
     add_chunk_offsets_ = make_kernel(program, "kd_add_chunk_offsets");
+    add_offsets_by_chunk_ = make_kernel(program, "kd_add_chunk_offsets_by_chunk");
     compact_by_flags_ = make_kernel(program, "kd_compact_by_flags");
     reduce_box_chunks_ = make_kernel(program, "kd_reduce_box_chunks");
     reduce_box_segments_ = make_kernel(program, "kd_reduce_box_segments");
@@ -39,8 +40,15 @@ void ClPrimitives::exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, s
     enqueue_kernel(queue, scan_chunks_, chunks, in, out, cl_uint(n), cl_uint(chunk),
                    cl_uint(chunks), sums);
     exclusive_scan(sums, sums, chunks);
-    enqueue_kernel(queue, add_chunk_offsets_, n, out, cl_uint(n), cl_uint(chunk), cl_uint(chunks),
-                   sums);
+    // On a CPU device one work-item per element costs more than the adding: by chunk, a 10^6
+    // scan on PoCL (2 cores, bench_primitives, median of 7) went from 3.2 to 0.51 ms, 10^5 from
+    // 0.38 to 0.09. GPUs keep one item per element, which coalesces.
+    if (device_.info().type == "CPU")
+        enqueue_kernel(queue, add_offsets_by_chunk_, chunks, out, cl_uint(n), cl_uint(chunk),
+                       cl_uint(chunks), sums);
+    else
+        enqueue_kernel(queue, add_chunk_offsets_, n, out, cl_uint(n), cl_uint(chunk),
+                       cl_uint(chunks), sums);
 }
 
 std::size_t ClPrimitives::compact(const cl::Buffer& values, const cl::Buffer& flags,

@@ -47,7 +47,8 @@ class ClPrimitives {
 
   private:
     ClDevice& device_;
-    cl::Kernel scan_chunks_, scan_single_, add_chunk_offsets_, compact_by_flags_;
+    cl::Kernel scan_chunks_, scan_single_, add_chunk_offsets_, add_offsets_by_chunk_,
+        compact_by_flags_;
     cl::Kernel reduce_box_chunks_, reduce_box_segments_, count_box_chunks_;
 };
 

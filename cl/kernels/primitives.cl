@@ -49,6 +49,17 @@ __kernel void kd_add_chunk_offsets(__global uint* out, uint n, uint chunk, uint 
     if (k == 0) out[n] = offsets[chunks];
 }
 
+/* Scan, step 3 by chunk: work-item i adds offsets[i] to chunk i's elements, one sequential
+ * stream per work-item (for CPU devices, where one work-item per element is the cost). */
+__kernel void kd_add_chunk_offsets_by_chunk(__global uint* out, uint n, uint chunk, uint chunks,
+                                            __global const uint* offsets) {
+    const uint i = get_global_id(0);
+    if (i >= chunks) return;
+    const uint begin = i * chunk, end = min(n, begin + chunk), offset = offsets[i];
+    for (uint k = begin; k < end; ++k) out[k] += offset;
+    if (i == 0) out[n] = offsets[chunks];
+}
+
 /* Compaction: element k with flags[k] != 0 goes to out[positions[k]], positions being the
  * exclusive scan of the flags (0/1). */
 __kernel void kd_compact_by_flags(__global const uint* values, __global const uint* flags,
