@@ -38,8 +38,9 @@ constexpr std::size_t kTileWidth = 8, kTileHeight = 8;
 /// device offers them, make the device's camera rays and normals round as the host's do (a GPU's
 /// default single-precision divide and sqrt may be off by an ulp or more); a CPU device rounds
 /// correctly either way. Nothing that changes float results (fast or relaxed math) is used.
-std::string render_options(const ClDevice& device, kd_u32 effects) {
-    std::string options = "-DKDRAY_COMPILED_EFFECTS=" + std::to_string(effects);
+std::string render_options(const ClDevice& device, kd_u32 effects, kd_u32 intersect) {
+    std::string options = "-DKDRAY_COMPILED_EFFECTS=" + std::to_string(effects) +
+                          " -DKDRAY_COMPILED_INTERSECT=" + std::to_string(intersect);
     cl_device_fp_config fp = 0;
     if (clGetDeviceInfo(device.device()(), CL_DEVICE_SINGLE_FP_CONFIG, sizeof(fp), &fp, nullptr) ==
             CL_SUCCESS &&
@@ -48,9 +49,10 @@ std::string render_options(const ClDevice& device, kd_u32 effects) {
     return options;
 }
 
-cl::Kernel render_kernel(const ClDevice& device, kd_u32 effects) {
-    return make_kernel(cached_program(device, "render.cl", render_options(device, effects)),
-                       "kd_render_pixels");
+cl::Kernel render_kernel(const ClDevice& device, kd_u32 effects, kd_u32 intersect) {
+    return make_kernel(
+        cached_program(device, "render.cl", render_options(device, effects, intersect)),
+        "kd_render_pixels");
 }
 
 /// The launch of `rows` image rows from `first_row`, in tiles.
@@ -66,8 +68,8 @@ void enqueue_rows(ClDevice& device, cl::Kernel& kernel, std::size_t width, std::
 
 }  // namespace
 
-void prepare_opencl_renderer(ClDevice& device, kd_u32 effects) {
-    cl::Kernel kernel = render_kernel(device, effects);
+void prepare_opencl_renderer(ClDevice& device, kd_u32 effects, kd_u32 intersect) {
+    cl::Kernel kernel = render_kernel(device, effects, intersect);
     // One tile over an image of width 0: every work-item returns at once, but the device
     // compiles the kernel for the tile size it will run with.
     KdView view{};
@@ -85,7 +87,7 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
                           const RenderInputs& inputs) {
     const KdView& view = inputs.view;
     const std::size_t pixels = std::size_t(view.width) * view.height;
-    cl::Kernel kernel = render_kernel(device, inputs.effects.bits());
+    cl::Kernel kernel = render_kernel(device, inputs.effects.bits(), inputs.intersect);
 
     std::vector<float> bounds = {tree.bounds.lo.x, tree.bounds.lo.y, tree.bounds.lo.z,
                                  tree.bounds.hi.x, tree.bounds.hi.y, tree.bounds.hi.z};

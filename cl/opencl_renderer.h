@@ -12,13 +12,15 @@
 namespace kdray {
 
 /// Builds the render program for the effects combination `effects` (KDRAY_EFFECT_* bits, as
-/// Effects::bits() gives them) and runs its kernel once on an empty image, so that the program
-/// build and the device compiler's first-launch work (PoCL compiles a kernel per work-group size
-/// on its first launch) are done before the first frame is timed. Later calls, and frames with
-/// these effects, reuse what it built.
-void prepare_opencl_renderer(ClDevice& device, kd_u32 effects);
+/// Effects::bits() gives them) and the triangle test `intersect` (KDRAY_INTERSECT_*), and runs its
+/// kernel once on an empty image, so that the program build and the device compiler's first-launch
+/// work (PoCL compiles a kernel per work-group size on its first launch) are done before the first
+/// frame is timed. Later calls, and frames with these effects, reuse what it built.
+void prepare_opencl_renderer(ClDevice& device, kd_u32 effects,
+                             kd_u32 intersect = KDRAY_INTERSECT_WATERTIGHT);
 
-/// Renders one frame. The render program is built once per effects combination and reused.
+/// Renders one frame. The render program is built once per effects combination and triangle
+/// test (inputs.intersect) and reused.
 FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& scene,
                           const RenderInputs& inputs);
 

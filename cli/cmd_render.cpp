@@ -64,6 +64,11 @@ struct RenderRun {
     Camera framed;  // without a camera in the render file: frame the first rendered scene
 };
 
+/// KDRAY_INTERSECT_* for --intersect.
+kd_u32 intersect_test(const RenderCommand& command) {
+    return command.intersect == "moller" ? KDRAY_INTERSECT_MOLLER : KDRAY_INTERSECT_WATERTIGHT;
+}
+
 /// Builds, traces and writes frame i; returns its stats.json record.
 nlohmann::json render_frame(RenderRun& run, std::size_t i, const Scene& scene, double load_ms,
                             Clock::time_point frame_start) {
@@ -71,9 +76,11 @@ nlohmann::json render_frame(RenderRun& run, std::size_t i, const Scene& scene, d
     Camera camera = run.settings.camera_given ? run.settings.camera_at(int(i)) : run.framed;
     BuiltTree built = run.builder.build(scene);
     RenderInputs render_inputs = prepare_render(scene, run.settings, camera, kd_u32(i));
+    render_inputs.intersect = intersect_test(command);
     // The render program of this frame's effects is built (once per run) outside trace_ms.
     if (command.tracer == "opencl")
-        prepare_opencl_renderer(run.session.device(), render_inputs.effects.bits());
+        prepare_opencl_renderer(run.session.device(), render_inputs.effects.bits(),
+                                render_inputs.intersect);
     auto trace_start = Clock::now();
     FrameResult result = command.tracer == "opencl"
                              ? render_opencl(run.session.device(), built.tree, scene, render_inputs)
@@ -87,6 +94,9 @@ nlohmann::json render_frame(RenderRun& run, std::size_t i, const Scene& scene, d
     if (command.aov) write_aov(aov_path, result.hits);
 
     const RayTotals& rays = result.rays;
+    // Centre rays that hit: with a camera inside a closed mesh, every miss is a leak.
+    const auto hit_pixels = std::count_if(result.hits.hits.begin(), result.hits.hits.end(),
+                                          [](const KdHit& h) { return h.prim != KDRAY_NO_HIT; });
     nlohmann::json frame = {
         {"frame", i},
         {"input", run.inputs[i]},
@@ -104,6 +114,7 @@ nlohmann::json render_frame(RenderRun& run, std::size_t i, const Scene& scene, d
           {"shadow", rays.shadow},
           {"reflection", rays.reflection},
           {"refraction", rays.refraction}}},
+        {"hit_pixels", hit_pixels},
         {"mrays_per_s", trace_ms > 0 ? double(rays.total()) / (trace_ms * 1e3) : 0.0}};
     if (command.aov) frame["aov"] = aov_path.filename().string();
     return frame;
@@ -162,6 +173,7 @@ int run_render(const RenderCommand& command) {
                                               : frame_bounds(scene.bounds());
         BuiltTree built = builder.build(scene);
         RenderInputs render_inputs = prepare_render(scene, settings, camera, 0);
+        render_inputs.intersect = intersect_test(command);
         if (command.tracer == "opencl")
             render_opencl(session.device(), built.tree, scene, render_inputs);
         else
@@ -208,6 +220,8 @@ int run_render(const RenderCommand& command) {
         {"tracer", command.tracer},
         {"render_file", command.render_file},
         {"image", {{"width", settings.width}, {"height", settings.height}, {"spp", settings.spp}}},
+        {"max_depth", settings.max_depth},
+        {"intersect", command.intersect},
         {"frames", frames},
         {"summary", summary_json(frames)}};
     if (!failures.empty()) stats["failed_frames"] = failures;

@@ -37,6 +37,7 @@ struct RenderCommand {
     std::string shard;        // I/N
     bool keep_going = false;  // render the remaining frames after a bad one
     bool warm_up = false;     // benchmarks: render the first frame once, untimed, before the run
+    std::string intersect = "watertight";  // ray-triangle test: "watertight" or "moller"
     BuilderOptions builder;
 };
 

@@ -86,6 +86,13 @@ int main(int argc, char** argv) {
     render_app->add_flag("--warm-up", render.warm_up,
                          "benchmarks: build and trace the first frame once, untimed, so that "
                          "program builds and first launches stay out of the frame times");
+    render_app
+        ->add_option("--intersect", render.intersect,
+                     "ray-triangle test: watertight (Woop et al. 2013: no ray slips through a "
+                     "shared edge) or moller (Moller-Trumbore 1997: faster, may leak through "
+                     "edges and vertices of closed meshes)")
+        ->check(CLI::IsMember({"watertight", "moller"}))
+        ->capture_default_str();
     render_app->add_option("--frames", render.frames,
                            "render only frames START:END[:STEP] (END included; frame numbers are "
                            "positions in the naturally sorted inputs)");

@@ -42,7 +42,19 @@ typedef struct KdSceneView {
     KDRAY_GLOBAL const KdMaterial* materials;
     KDRAY_GLOBAL const KdLight* lights;
     kd_f32 bounds[6];
+    kd_u32 intersect; /* KDRAY_INTERSECT_*: the ray-triangle test (a kernel's is compiled in) */
 } KdSceneView;
+
+/* Nearest hit, and occlusion, in the scene with its triangle test. */
+KDRAY_HOT_INLINE KdHit kd_scene_closest(const KdSceneView* scene, KdRay ray) {
+    return kd_trace(scene->nodes, scene->leaf_indices, scene->triangles, scene->bounds, ray, 0,
+                    scene->intersect);
+}
+KDRAY_HOT_INLINE int kd_scene_occluded(const KdSceneView* scene, KdRay ray) {
+    return kd_trace(scene->nodes, scene->leaf_indices, scene->triangles, scene->bounds, ray, 1,
+                    scene->intersect)
+               .prim != KDRAY_NO_HIT;
+}
 
 /* What one pixel produces. */
 typedef struct KdPixel {
@@ -183,9 +195,7 @@ KDRAY_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
             shadow.tmin = 0.0f;
             shadow.tmax = distance - view->ray_epsilon;
             rays->shadow += 1u;
-            if (kd_trace_occluded(scene->nodes, scene->leaf_indices, scene->triangles,
-                                  scene->bounds, shadow))
-                continue;
+            if (kd_scene_occluded(scene, shadow)) continue;
         }
         kd_f32 highlight = 0.0f;
         if (m->flags & KDRAY_MATERIAL_HIGHLIGHT) {
@@ -211,8 +221,7 @@ KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdV
                                              KdRay primary, kd_f32* rgb, KdRayCounts* rays,
                                              KdHit* first_hit, kd_f32* first_normal) {
     rays->primary += 1u;
-    const KdHit hit = kd_trace_closest(scene->nodes, scene->leaf_indices, scene->triangles,
-                                       scene->bounds, primary);
+    const KdHit hit = kd_scene_closest(scene, primary);
     kd_f32 n[3] = {0.0f, 0.0f, 0.0f};
     if (hit.prim != KDRAY_NO_HIT)
         kd_facing_normal(scene->triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE,
@@ -256,8 +265,7 @@ KDRAY_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* view, 
             rays->reflection += 1u;
         else
             rays->refraction += 1u;
-        const KdHit hit = kd_trace_closest(scene->nodes, scene->leaf_indices, scene->triangles,
-                                           scene->bounds, r.ray);
+        const KdHit hit = kd_scene_closest(scene, r.ray);
         kd_f32 n[3] = {0.0f, 0.0f, 0.0f};
         KDRAY_GLOBAL const kd_f32* tri = scene->triangles;
         if (hit.prim != KDRAY_NO_HIT) {
@@ -337,8 +345,7 @@ KDRAY_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView* vie
     const kd_f32 cx = (kd_f32)x + 0.5f, cy = (kd_f32)y + 0.5f;
     if (view->spp > 1u) {
         /* The AOV always comes from the centre ray (conventions.md), an extra primary ray. */
-        out.centre_hit = kd_trace_closest(scene->nodes, scene->leaf_indices, scene->triangles,
-                                          scene->bounds, kd_camera_ray(view, cx, cy));
+        out.centre_hit = kd_scene_closest(scene, kd_camera_ray(view, cx, cy));
         out.rays.primary += 1u;
         kd_set3(out.normal, 0.0f, 0.0f, 0.0f);
         if (out.centre_hit.prim != KDRAY_NO_HIT) {

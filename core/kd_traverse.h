@@ -136,6 +136,9 @@ KDRAY_HOT_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL c
     return 1;
 }
 
+/* The fast, non-watertight alternative and KDRAY_USE_MOLLER, which picks between the two. */
+#include "core/kd_intersect_moller.h"
+
 /* Clips the ray's [*t0, *t1] to the box {lo, hi}. Returns 0 when they do not overlap. A ray
  * lying in a box face (flat boxes included) counts as inside. */
 KDRAY_HOT_INLINE int kd_clip_to_box(const KdRayPrecomp* p, const kd_f32* lo, const kd_f32* hi,
@@ -165,14 +168,16 @@ typedef struct KdTraversalEntry {
 } KdTraversalEntry;
 
 /* Nearest hit of `ray` in the tree or, with any_hit, the first hit found in [tmin, tmax) (shadow
- * rays need no more). bounds: the root box as lo.xyz, hi.xyz. The stack has
- * KDRAY_MAX_DEPTH entries: one push per inner node on the current path, and builders never make a
- * path deeper than that. Hits are accepted wherever they lie on the ray (a triangle in a leaf may
- * extend beyond it); the walk ends when the best hit is nearer than the next node's entry. */
+ * rays need no more), with the triangle test `intersect` names (KDRAY_INTERSECT_*; a kernel
+ * ignores it for its compile-time KDRAY_COMPILED_INTERSECT). bounds: the root box as lo.xyz,
+ * hi.xyz. The stack has KDRAY_MAX_DEPTH entries: one push per inner node on the current path, and
+ * builders never make a path deeper than that. Hits are accepted wherever they lie on the ray (a
+ * triangle in a leaf may extend beyond it); the walk ends when the best hit is nearer than the next
+ * node's entry. */
 KDRAY_HOT_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
                                 KDRAY_GLOBAL const kd_u32* leaf_indices,
                                 KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
-                                KdRay ray, int any_hit) {
+                                KdRay ray, int any_hit, kd_u32 intersect) {
     KdHit hit;
     hit.t = ray.tmax;
     hit.prim = KDRAY_NO_HIT;
@@ -232,10 +237,11 @@ KDRAY_HOT_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
         const kd_u32 count = kd_leaf_count(node), offset = kd_leaf_offset(node);
         for (kd_u32 i = 0; i < count; ++i) {
             const kd_u32 id = leaf_indices[offset + i];
-            if (kd_intersect_triangle(&p, triangles + (size_t)id * KDRAY_FLOATS_PER_TRIANGLE, id,
-                                      ray.tmin, &hit) &&
-                any_hit)
-                return hit;
+            KDRAY_GLOBAL const kd_f32* tri = triangles + (size_t)id * KDRAY_FLOATS_PER_TRIANGLE;
+            const int new_best = KDRAY_USE_MOLLER(intersect)
+                                     ? kd_intersect_triangle_moller(&p, tri, id, ray.tmin, &hit)
+                                     : kd_intersect_triangle(&p, tri, id, ray.tmin, &hit);
+            if (new_best && any_hit) return hit;
         }
         if (stack_size == 0) break;
         --stack_size;
@@ -251,15 +257,16 @@ KDRAY_HOT_INLINE KdHit kd_trace_closest(KDRAY_GLOBAL const KdNode* nodes,
                                         KDRAY_GLOBAL const kd_u32* leaf_indices,
                                         KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
                                         KdRay ray) {
-    return kd_trace(nodes, leaf_indices, triangles, bounds, ray, 0);
+    return kd_trace(nodes, leaf_indices, triangles, bounds, ray, 0, KDRAY_INTERSECT_WATERTIGHT);
 }
 
-/* 1 when anything blocks the ray within [tmin, tmax). */
+/* 1 when anything blocks the ray within [tmin, tmax). Both helpers use the watertight test. */
 KDRAY_HOT_INLINE int kd_trace_occluded(KDRAY_GLOBAL const KdNode* nodes,
                                        KDRAY_GLOBAL const kd_u32* leaf_indices,
                                        KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
                                        KdRay ray) {
-    return kd_trace(nodes, leaf_indices, triangles, bounds, ray, 1).prim != KDRAY_NO_HIT;
+    return kd_trace(nodes, leaf_indices, triangles, bounds, ray, 1, KDRAY_INTERSECT_WATERTIGHT)
+               .prim != KDRAY_NO_HIT;
 }
 
 #endif /* KDRAY_KD_TRAVERSE_H */

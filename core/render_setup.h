@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/kd_shared.h"
+#include "core/kd_traverse.h"
 #include "core/render_file.h"
 #include "core/scene.h"
 
@@ -37,6 +38,8 @@ struct RenderInputs {
     std::vector<KdMaterial> materials;
     std::vector<KdLight> lights;
     Effects effects;
+    /// KDRAY_INTERSECT_*: the ray-triangle test of every trace (`kdray render --intersect`).
+    kd_u32 intersect = KDRAY_INTERSECT_WATERTIGHT;
 };
 RenderInputs prepare_render(const Scene& scene, const RenderSettings& settings,
                             const Camera& camera, kd_u32 seed);

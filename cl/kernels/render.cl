@@ -1,6 +1,7 @@
 /* render.cl — one work-item per pixel: the shared shading of core/kd_render.h over the kd-tree
  * built on the device. Built once per effects combination (-DKDRAY_COMPILED_EFFECTS), so a matte
- * scene's kernel holds no secondary-ray code at all. */
+ * scene's kernel holds no secondary-ray code at all, and per triangle test
+ * (-DKDRAY_COMPILED_INTERSECT, watertight unless it says Moller-Trumbore). */
 #include "core/kd_render.h"
 
 __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
@@ -24,6 +25,7 @@ __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u
     scene.materials = materials;
     scene.lights = lights;
     for (int i = 0; i < 6; ++i) scene.bounds[i] = bounds[i];
+    scene.intersect = KDRAY_COMPILED_INTERSECT;
 
     const KdView v = view;
     const KdPixel pixel = kd_render_pixel(&scene, &v, x, y);
