@@ -32,9 +32,12 @@ enum SlotKind : unsigned {
     kSlotSmall,        // the child becomes a small root (1/0)
     kSlotSmallRefs,    // ... its reference count
     kSlotLeafRefs,     // references of a node that becomes a leaf (in its slot 2i)
-    kSlotChild,        // the child exists (it gets a node id)
-    kSlotKinds
+    kSlotChild,        // new nodes of generation 0 (then 1, ..., kMaxCuts): they get node ids
 };
+
+// Empty-space cuts one large node may chain in one level (each side of its box at most once).
+constexpr unsigned kMaxCuts = 6;
+constexpr unsigned kSlotKinds = kSlotChild + kMaxCuts + 1;
 
 // A large-stage level holding more references than this many per triangle splits no further: its
 // nodes become leaves. Real scenes stay well below it (about 1.2 to 2 in the large stage); it
@@ -52,10 +55,11 @@ constexpr cl_uint kSmallRootAxis = 4;
 constexpr cl_uint kSubtreeBudgetScale = 10;
 
 std::string build_defines() {
-    static const char* names[kSlotKinds] = {"LARGE",      "LARGE_REFS", "LARGE_CHUNKS", "SMALL",
-                                            "SMALL_REFS", "LEAF_REFS",  "CHILD"};
+    static const char* names[kSlotChild + 1] = {"LARGE",      "LARGE_REFS", "LARGE_CHUNKS", "SMALL",
+                                                "SMALL_REFS", "LEAF_REFS",  "CHILD"};
     std::string defines = primitives_defines();
-    for (unsigned k = 0; k < kSlotKinds; ++k)
+    defines += " -DKDRAY_MAX_CUTS=" + std::to_string(kMaxCuts) + "u";
+    for (unsigned k = 0; k <= kSlotChild; ++k)
         defines += " -DKDRAY_SLOT_" + std::string(names[k]) + "=" + std::to_string(k) + "u";
     defines += " -DKDRAY_SMALL_ROOT_AXIS=" + std::to_string(kSmallRootAxis) + "u";
     return defines + " -DKDRAY_SLOT_KINDS=" + std::to_string(unsigned(kSlotKinds)) + "u";
@@ -255,17 +259,20 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
     DeviceArray node_count = b.allocate(4, "large node reference counts");
     DeviceArray node_chunk = b.allocate(8, "large node chunk starts");
     DeviceArray node_id = b.allocate(4, "large node ids");
+    DeviceArray node_depth = b.allocate(4, "large node depths");
     write_array(q, node_box, box_floats(bounds));
     write_array(q, node_start, std::vector<cl_uint>{0});
     write_array(q, node_count, std::vector<cl_uint>{n});
     write_array(q, node_chunk, std::vector<cl_uint>{0, chunks});
     write_array(q, node_id, std::vector<cl_uint>{0});
+    write_array(q, node_depth, std::vector<cl_uint>{0});
     DeviceArray ref_tri = std::move(b.triangle_ids), ref_box = std::move(b.triangle_boxes);
     const std::size_t budget = kReferenceBudgetPerTriangle * std::size_t(n);
 
-    for (cl_uint depth = 0; nodes > 0; ++depth) {
+    while (nodes > 0) {
         ++b.large_levels;
-        const cl_uint force_leaf = depth >= cl_uint(max_depth) || refs > budget;
+        // Nodes at the depth limit become leaves in kd_split_large_nodes.
+        const cl_uint force_leaf = refs > budget;
         const cl_uint slots = 2 * nodes;
 
         /* Node bounds: segmented reduction of the reference boxes, then the split decision. */
@@ -279,9 +286,14 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
         DeviceArray split_axis = b.allocate(nodes * 4, "large split axes");
         DeviceArray split_pos = b.allocate(nodes * 4, "large split positions");
         DeviceArray planar = b.allocate(nodes * 4, "large split planar sides");
+        DeviceArray cut_count = b.allocate(nodes * 4, "empty-space cuts per node");
+        DeviceArray cut_code = b.allocate(std::size_t(nodes) * kMaxCuts * 4, "empty-space cuts");
+        DeviceArray cut_pos = b.allocate(std::size_t(nodes) * kMaxCuts * 4, "empty-space planes");
         enqueue_kernel(q, k.split_large, nodes, nodes, node_box.buffer(), tight.buffer(),
-                       force_leaf, cl_float(b.params.empty_space_ratio), split_axis.buffer(),
-                       split_pos.buffer(), planar.buffer());
+                       node_depth.buffer(), cl_uint(max_depth), force_leaf,
+                       cl_float(b.params.empty_space_ratio), split_axis.buffer(),
+                       split_pos.buffer(), planar.buffer(), cut_count.buffer(), cut_code.buffer(),
+                       cut_pos.buffer());
 
         /* Classify references, then rank them within their children by one scan. */
         DeviceArray rank = b.allocate((2 * std::size_t(refs) + 1) * 4, "reference ranks");
@@ -296,7 +308,8 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
         const std::size_t slot_values = std::size_t(kSlotKinds) * slots;
         DeviceArray slot = b.allocate((slot_values + 1) * 4, "child slots");
         enqueue_kernel(q, k.count_large, nodes, nodes, node_start.buffer(), node_count.buffer(),
-                       split_axis.buffer(), rank.buffer(), refs, threshold, slot.buffer());
+                       split_axis.buffer(), cut_count.buffer(), rank.buffer(), refs, threshold,
+                       slot.buffer());
         b.primitives.exclusive_scan(slot.buffer(), slot.buffer(), slot_values);
 
         /* The level's one read-back: the totals of every slot kind. */
@@ -308,11 +321,12 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
                                     &at[kind]);
             q.finish();
         });
-        auto total = [&](SlotKind kind) { return at[kind + 1] - at[kind]; };
+        auto total = [&](unsigned kind) { return at[kind + 1] - at[kind]; };
         const cl_uint next_nodes = total(kSlotLarge), next_refs = total(kSlotLargeRefs);
         const cl_uint next_chunks = total(kSlotLargeChunks), new_roots = total(kSlotSmall);
         const cl_uint new_small_refs = total(kSlotSmallRefs), new_leaf_refs = total(kSlotLeafRefs);
-        const cl_uint new_nodes = total(kSlotChild);
+        cl_uint new_nodes = 0;
+        for (unsigned g = 0; g <= kMaxCuts; ++g) new_nodes += total(kSlotChild + g);
 
         /* Room for what this level creates, then write it. */
         b.reserve_records(std::size_t(b.node_count) + new_nodes);
@@ -328,13 +342,15 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
         DeviceArray next_count = b.allocate(next_nodes * 4, "large node reference counts");
         DeviceArray next_chunk = b.allocate((next_nodes + 1) * 4, "large node chunk starts");
         DeviceArray next_id = b.allocate(next_nodes * 4, "large node ids");
+        DeviceArray next_depth = b.allocate(next_nodes * 4, "large node depths");
         DeviceArray next_tri = b.allocate(std::size_t(next_refs) * 4, "triangle references");
         DeviceArray next_ref_box = b.allocate(std::size_t(next_refs) * 24, "reference boxes");
         enqueue_kernel(
             q, k.emit_large, nodes, nodes, node_box.buffer(), node_count.buffer(), node_id.buffer(),
-            split_axis.buffer(), split_pos.buffer(), slot.buffer(), b.node_count, b.small_roots,
-            b.small_refs, b.leaf_refs, depth + 1, b.records.buffer(), next_box.buffer(),
-            next_start.buffer(), next_count.buffer(), next_chunk.buffer(), next_id.buffer(),
+            split_axis.buffer(), split_pos.buffer(), cut_count.buffer(), cut_code.buffer(),
+            cut_pos.buffer(), node_depth.buffer(), slot.buffer(), b.node_count, b.small_roots,
+            b.small_refs, b.leaf_refs, b.records.buffer(), next_box.buffer(), next_start.buffer(),
+            next_count.buffer(), next_chunk.buffer(), next_id.buffer(), next_depth.buffer(),
             b.root_ref_start.buffer(), b.root_ref_count.buffer(), b.small_first.box.buffer(),
             b.small_first.id.buffer(), b.small_first.depth.buffer());
         enqueue_kernel(q, k.distribute, refs, refs, ref_tri.buffer(), child_box.buffer(), nodes,
@@ -342,7 +358,8 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
                        b.small_roots, b.small_refs, b.leaf_refs, next_tri.buffer(),
                        next_ref_box.buffer(), b.small_ref_tri.buffer(), b.small_ref_box.buffer(),
                        b.small_ref_root.buffer(), b.leaf_store.buffer());
-        b.add_batch(new_nodes);
+        // One batch per generation: a chain's nodes are each other's parents (build_output.cl).
+        for (unsigned g = 0; g <= kMaxCuts; ++g) b.add_batch(total(kSlotChild + g));
         b.small_roots += new_roots;
         b.small_refs += new_small_refs;
         b.leaf_refs = leaf_total;
@@ -350,7 +367,8 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
         nodes = next_nodes, refs = next_refs, chunks = next_chunks;
         node_box = std::move(next_box), node_start = std::move(next_start);
         node_count = std::move(next_count), node_chunk = std::move(next_chunk);
-        node_id = std::move(next_id), ref_tri = std::move(next_tri);
+        node_id = std::move(next_id), node_depth = std::move(next_depth);
+        ref_tri = std::move(next_tri);
         ref_box = std::move(next_ref_box);
     }
 }
