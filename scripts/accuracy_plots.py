@@ -67,7 +67,8 @@ def tables_markdown(header, tree_rows, image_rows, robust_rows):
 
     out.append("\n## Which tree setting gives the fastest frame\n\n"
                "Dynamic: rebuilt every frame (frame = build + trace). Static: built once, traced "
-               "many times (frame = trace). Primary + shadow rays, one light, max_depth 1.\n\n")
+               "many times (frame = trace). Primary + shadow rays, one light, max_depth 1. "
+               "Dynamic figures are the median frame, static ones the best of the repeats.\n\n")
     pct = lambda a, b: f"{100.0 * (a / b - 1):+.0f}%"  # noqa: E731
     out.append(_table([
         ("scene", lambda b: f"{b['scene']} ({b['kind']}, {b['triangles']} tris)"),
@@ -99,7 +100,7 @@ def tables_markdown(header, tree_rows, image_rows, robust_rows):
 
     if robust_rows:
         out.append("\n## Numerical robustness against speed\n\nOrdinary scenes: trace ms of "
-                   "primary + shadow rays (median of 3). Closed meshes with the camera inside, "
+                   "primary + shadow rays (best of 3). Closed meshes with the camera inside, "
                    "centre rays through mesh vertices: every ray must hit, so each miss is a "
                    "leak through a shared edge or vertex.\n\n")
         out.append(_table([("scene", lambda r: r["scene"]), ("case", lambda r: r["case"]),
@@ -172,6 +173,9 @@ def plot_image_accuracy(plt, path, image_rows):
     plt.close(fig)
 
 
+MODE_COLOURS = {"watertight": "tab:blue", "moller": "tab:orange", "Embree peer": "tab:grey"}
+
+
 def plot_robustness(plt, path, robust_rows):
     ordinary = [r for r in robust_rows if r["pixels"] == ""]
     hard = [r for r in robust_rows if r["pixels"] != ""]
@@ -179,14 +183,16 @@ def plot_robustness(plt, path, robust_rows):
     for ax, rows, key, label in ((axes[0], ordinary, "trace_ms", "trace ms"),
                                  (axes[1], hard, "leaks", "leaking pixels")):
         scenes = list(dict.fromkeys(r["scene"] for r in rows))
-        for i, mode in enumerate(("watertight", "moller")):
+        modes = [m for m in MODE_COLOURS if any(r["intersect"] == m for r in rows)]
+        width = 0.8 / max(1, len(modes))
+        for i, mode in enumerate(modes):
             values = [next((r[key] for r in rows if r["scene"] == s and r["intersect"] == mode),
                            0) for s in scenes]
-            bars = ax.bar([x + 0.4 * i for x in range(len(scenes))], values, width=0.4,
-                          label=mode)
+            bars = ax.bar([x + width * i for x in range(len(scenes))], values, width=width,
+                          label=mode, color=MODE_COLOURS[mode])
             ax.bar_label(bars, fmt="%.0f", fontsize=7)
-        ax.set_xticks([x + 0.2 for x in range(len(scenes))], scenes, rotation=20, fontsize=7,
-                      ha="right")
+        ax.set_xticks([x + 0.4 - width / 2 for x in range(len(scenes))], scenes, rotation=20,
+                      fontsize=7, ha="right")
         ax.set_ylabel(label)
         ax.legend(fontsize=8)
     axes[0].set_title("Speed: primary + shadow rays", fontsize=10)
