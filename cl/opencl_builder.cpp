@@ -1,8 +1,8 @@
-// opencl_builder.cpp — the host side of the OpenCL kd-tree builder (Zhou et al. 2008): it holds the
-// build's device arrays, launches the kernels of build_large.cl, build_small.cl and
-// build_output.cl stage by stage, and reads back only the few counts that size the next launch
-// (one read per level). The algorithm itself lives in the kernels; the comments there cite the
-// paper's sections.
+// opencl_builder.cpp — the host side of the OpenCL kd-tree builder (Zhou et al. 2008): the build's
+// entry points and its upload and large-node stages (build_large.cl); the small-node and output
+// stages are in opencl_builder_small.cpp, the state they share in opencl_build_state.h. The host
+// reads back only the few counts that size the next launch (one read per level). The algorithm
+// itself lives in the kernels; the comments there cite the paper's sections.
 #include "cl/opencl_builder.h"
 
 #include <algorithm>
@@ -16,11 +16,13 @@
 #include "cl/cl_error.h"
 #include "cl/device_memory.h"
 #include "cl/launch.h"
+#include "cl/opencl_build_state.h"
 #include "cl/primitives.h"
 #include "cl/program_cache.h"
 #include "core/error.h"
 
 namespace kdray {
+namespace build_detail {
 namespace {
 
 // Segments of the large stage's per-child slot arrays (build_large.cl passes through these
@@ -44,9 +46,6 @@ constexpr unsigned kSlotKinds = kSlotChild + kMaxCuts + 1;
 // bounds memory on pathological input where every median plane cuts most triangles.
 constexpr std::size_t kReferenceBudgetPerTriangle = 4;
 
-// KdBuildNode.axis of a small root, whose subtree the small stage writes (build_common.cl).
-constexpr cl_uint kSmallRootAxis = 4;
-
 // Records the small stage first sets aside per small root of n references: this times n + 1.
 // Subtrees average 2.8 nodes per reference on the kitchen and 5.2 on the bunny, and need a scale
 // of at most 7 and 10; the few that outgrow the first budget are built again in a second pass.
@@ -65,30 +64,28 @@ std::string build_defines() {
     return defines + " -DKDRAY_SLOT_KINDS=" + std::to_string(unsigned(kSlotKinds)) + "u";
 }
 
-struct Kernels {
-    cl::Kernel compute_aabbs, split_large, classify, count_large, emit_large, distribute;
-    cl::Kernel split_masks, build_subtrees;
-    cl::Kernel size_subtrees, place_subtrees, write_nodes, write_small;
+}  // namespace
 
-    explicit Kernels(const ClDevice& device) {
-        const std::string defines = build_defines();
-        const cl::Program large = cached_program(device, "build_large.cl", defines);
-        const cl::Program small = cached_program(device, "build_small.cl", defines);
-        const cl::Program output = cached_program(device, "build_output.cl", defines);
-        compute_aabbs = make_kernel(large, "kd_compute_aabbs");
-        split_large = make_kernel(large, "kd_split_large_nodes");
-        classify = make_kernel(large, "kd_classify_references");
-        count_large = make_kernel(large, "kd_count_large_children");
-        emit_large = make_kernel(large, "kd_emit_large_children");
-        distribute = make_kernel(large, "kd_distribute_references");
-        split_masks = make_kernel(small, "kd_compute_split_masks");
-        build_subtrees = make_kernel(small, "kd_build_small_subtrees");
-        size_subtrees = make_kernel(output, "kd_size_subtrees");
-        place_subtrees = make_kernel(output, "kd_place_subtrees");
-        write_nodes = make_kernel(output, "kd_write_nodes");
-        write_small = make_kernel(output, "kd_write_small_subtrees");
-    }
-};
+Kernels::Kernels(const ClDevice& device) {
+    const std::string defines = build_defines();
+    const cl::Program large = cached_program(device, "build_large.cl", defines);
+    const cl::Program small = cached_program(device, "build_small.cl", defines);
+    const cl::Program output = cached_program(device, "build_output.cl", defines);
+    compute_aabbs = make_kernel(large, "kd_compute_aabbs");
+    split_large = make_kernel(large, "kd_split_large_nodes");
+    classify = make_kernel(large, "kd_classify_references");
+    count_large = make_kernel(large, "kd_count_large_children");
+    emit_large = make_kernel(large, "kd_emit_large_children");
+    distribute = make_kernel(large, "kd_distribute_references");
+    split_masks = make_kernel(small, "kd_compute_split_masks");
+    build_subtrees = make_kernel(small, "kd_build_small_subtrees");
+    size_subtrees = make_kernel(output, "kd_size_subtrees");
+    place_subtrees = make_kernel(output, "kd_place_subtrees");
+    write_nodes = make_kernel(output, "kd_write_nodes");
+    write_small = make_kernel(output, "kd_write_small_subtrees");
+}
+
+namespace {
 
 /// Per-stage wall times. Each lap waits for the queue, so a stage's time is its own kernels'.
 class StageClock {
@@ -108,105 +105,6 @@ class StageClock {
     BuildReport* report_;
     std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
-
-/// The small roots (structure of arrays, one entry per root): box, depth and node id.
-struct SmallRoots {
-    DeviceArray box, depth, id;
-};
-
-/// Everything one build holds on the device between its stages.
-struct Build {
-    Build(ClDevice& d, const BuildParams& p, std::size_t triangle_count)
-        : device(d),
-          queue(d.queue()),
-          memory(d),
-          primitives(d),
-          kernels(d),
-          params(p),
-          triangles(static_cast<cl_uint>(triangle_count)) {}
-
-    ClDevice& device;
-    cl::CommandQueue& queue;
-    DeviceMemory memory;
-    ClPrimitives primitives;
-    Kernels kernels;
-    BuildParams params;
-    cl_uint triangles;
-
-    DeviceArray triangle_data, triangle_boxes, triangle_ids;
-    // Node records by id, and the id ranges in creation order (children after their parents).
-    DeviceArray records;
-    cl_uint node_count = 0;
-    std::vector<std::pair<cl_uint, cl_uint>> batches;
-    // Leaves of the large stage keep their triangles here.
-    DeviceArray leaf_store;
-    cl_uint leaf_refs = 0;
-    // Small roots: their reference lists (triangle, clipped box, root) and their ranges.
-    DeviceArray small_ref_tri, small_ref_box, small_ref_root, root_ref_start, root_ref_count;
-    cl_uint small_refs = 0, small_roots = 0;
-    // The small roots' nodes, and the subtrees the small stage builds from them: records
-    // (budget_scale * (refs + 1) per root of refs references), node and leaf reference counts.
-    SmallRoots small_first;
-    // [0] the first pass's records, [1] the second's (only when a subtree outgrew the first).
-    DeviceArray subtree_nodes[2], subtree_node_count, subtree_leaf_refs;
-    cl_uint small_nodes = 0, budget_scale[2] = {0, 0};
-    int large_levels = 0, small_levels = 0;
-
-    DeviceArray allocate(std::size_t bytes, const std::string& what) {
-        return memory.allocate(bytes, what);
-    }
-    void add_batch(cl_uint count) {
-        if (count == 0) return;
-        batches.emplace_back(node_count, count);
-        node_count += count;
-    }
-    void reserve_records(std::size_t nodes) {
-        if (nodes > KDRAY_MAX_OFFSET)
-            throw Error("OpenCL kd-tree build: " + std::to_string(nodes) +
-                        " nodes exceed the layout's limit of " + std::to_string(KDRAY_MAX_OFFSET));
-        memory.reserve(records, nodes * sizeof(KdBuildNode), node_count * sizeof(KdBuildNode),
-                       "kd-tree node records");
-    }
-    void reserve_small_roots(std::size_t roots, std::size_t refs) {
-        const std::size_t r = small_roots, n = small_refs;
-        memory.reserve(small_ref_tri, refs * 4, n * 4, "small root triangle ids");
-        memory.reserve(small_ref_box, refs * 24, n * 24, "small root triangle boxes");
-        memory.reserve(small_ref_root, refs * 4, n * 4, "small root of each reference");
-        memory.reserve(root_ref_start, roots * 4, r * 4, "small root reference starts");
-        memory.reserve(root_ref_count, roots * 4, r * 4, "small root reference counts");
-        memory.reserve(small_first.box, roots * 24, r * 24, "small node boxes");
-        memory.reserve(small_first.depth, roots * 4, r * 4, "small node depths");
-        memory.reserve(small_first.id, roots * 4, r * 4, "small node ids");
-    }
-};
-
-template <class T>
-void write_array(cl::CommandQueue& queue, const DeviceArray& array, const std::vector<T>& values) {
-    with_cl_context("uploading build data", [&] {
-        queue.enqueueWriteBuffer(array.buffer(), CL_TRUE, 0, values.size() * sizeof(T),
-                                 values.data());
-    });
-}
-
-cl_uint read_uint(cl::CommandQueue& queue, const DeviceArray& array, std::size_t index) {
-    cl_uint value = 0;
-    with_cl_context("reading a build count", [&] {
-        queue.enqueueReadBuffer(array.buffer(), CL_TRUE, index * sizeof(cl_uint), sizeof(value),
-                                &value);
-    });
-    return value;
-}
-
-std::vector<float> box_floats(const Aabb& b) {
-    return {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
-}
-
-cl_uint checked_u32(std::uint64_t value, const char* what) {
-    if (value > 0xFFFFFFFFull)
-        throw Error(std::string("OpenCL kd-tree build: ") + what + " overflow 32 bits (" +
-                    std::to_string(value) + ")");
-    return static_cast<cl_uint>(value);
-}
 
 /* Upload and triangle bounding boxes (§4, first step). */
 void compute_triangle_boxes(Build& b, const Scene& scene, StageClock& clock) {
@@ -373,102 +271,10 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
     }
 }
 
-/* Small-node stage (§4.2): split-candidate masks once, then every small root's subtree in one
- * launch (build_small.cl) instead of one launch, scan and read-back per level. Kitchen small_nodes
- * 153-199 -> 79 ms, bunny 112 -> 71 ms (median of 5 builds, same sitting, loaded 2-core machine);
- * CPU time (perf stat task-clock, 6 builds) kitchen 2912 -> 2380 ms, bunny 1903 -> 1465 ms. */
-void run_small_stage(Build& b, int max_depth, cl_uint first_scale) {
-    // The output stage reads the subtree counts even when there are no small roots.
-    const std::size_t roots = std::max<cl_uint>(b.small_roots, 1);
-    b.subtree_node_count = b.allocate(roots * 4, "subtree node counts");
-    b.subtree_leaf_refs = b.allocate(roots * 4, "subtree leaf references");
-    if (b.small_roots == 0) return;
-    cl::CommandQueue& q = b.queue;
-    Kernels& k = b.kernels;
-    const std::size_t candidates = 6 * std::size_t(b.small_refs);
-    checked_u32(candidates, "split candidates");
-    // 16 masks per reference: 6 candidates below and 6 above, each padded to a ulong8.
-    DeviceArray side_masks = b.allocate(std::size_t(b.small_refs) * 16 * 8, "candidate masks");
-    enqueue_kernel(q, k.split_masks, b.small_refs, b.small_refs, b.small_ref_box.buffer(),
-                   b.small_ref_root.buffer(), b.root_ref_start.buffer(), b.root_ref_count.buffer(),
-                   side_masks.buffer());
-
-    /* Every subtree, into records set aside per root; the few subtrees that outgrow theirs are
-     * only counted, and built again into records sized by the largest (second pass). */
-    DeviceArray totals = b.allocate(3 * 4, "small stage totals");
-    with_cl_context("clearing the small stage totals",
-                    [&] { q.enqueueFillBuffer(totals.buffer(), cl_uint(0), 0, 3 * 4); });
-    std::array<cl_uint, 3> total{};
-    auto build_subtrees = [&](cl_uint scale, cl_uint first_scale, const DeviceArray& records) {
-        enqueue_kernel(
-            q, k.build_subtrees, b.small_roots, b.small_roots, b.small_first.box.buffer(),
-            b.small_first.depth.buffer(), b.root_ref_start.buffer(), b.root_ref_count.buffer(),
-            b.small_ref_box.buffer(), side_masks.buffer(), cl_float(b.params.costs.traversal),
-            cl_float(b.params.costs.intersection), cl_float(b.params.empty_bonus),
-            cl_uint(max_depth), scale, first_scale, records.buffer(), b.subtree_node_count.buffer(),
-            b.subtree_leaf_refs.buffer(), totals.buffer());
-    };
-    const std::size_t budget_units = std::size_t(b.small_refs) + b.small_roots;
-    b.budget_scale[0] = b.budget_scale[1] = first_scale;
-    b.subtree_nodes[0] = b.allocate(
-        checked_u32(first_scale * budget_units, "small node records") * 16, "small node records");
-    build_subtrees(first_scale, 0, b.subtree_nodes[0]);
-    with_cl_context("reading the small stage totals",
-                    [&] { q.enqueueReadBuffer(totals.buffer(), CL_TRUE, 0, 3 * 4, total.data()); });
-    if (total[1] > first_scale) {
-        b.budget_scale[1] = total[1];
-        b.subtree_nodes[1] =
-            b.allocate(checked_u32(std::size_t(total[1]) * budget_units, "small node records") * 16,
-                       "small node records (second pass)");
-        build_subtrees(total[1], first_scale, b.subtree_nodes[1]);
-    }
-    b.small_nodes = total[0];
-    b.small_levels = int(total[2]);
-}
-
-/* Output stage (§4.3): subtree sizes bottom-up, preorder positions top-down, then the nodes. */
-DeviceArray write_preorder(Build& b, DeviceArray& leaf_indices, cl_uint& leaf_index_count) {
-    cl::CommandQueue& q = b.queue;
-    Kernels& k = b.kernels;
-    // Each small root's record stands for its subtree, whose node count includes the root.
-    const std::size_t records = b.node_count,
-                      count = std::size_t(b.node_count) - b.small_roots + b.small_nodes;
-    if (count > KDRAY_MAX_OFFSET)
-        throw Error("OpenCL kd-tree build: " + std::to_string(count) +
-                    " nodes exceed the layout's limit of " + std::to_string(KDRAY_MAX_OFFSET));
-    DeviceArray subtree_nodes = b.allocate(records * 4, "subtree node counts");
-    DeviceArray subtree_refs = b.allocate(records * 4, "subtree reference counts");
-    DeviceArray position = b.allocate(records * 4, "preorder positions");
-    DeviceArray leaf_position = b.allocate(records * 4, "leaf index positions");
-    for (auto it = b.batches.rbegin(); it != b.batches.rend(); ++it)
-        enqueue_kernel(q, k.size_subtrees, it->second, it->first, it->second, b.records.buffer(),
-                       b.subtree_node_count.buffer(), b.subtree_leaf_refs.buffer(),
-                       subtree_nodes.buffer(), subtree_refs.buffer());
-    write_array(q, position, std::vector<cl_uint>{0});
-    write_array(q, leaf_position, std::vector<cl_uint>{0});
-    for (const auto& [begin, n] : b.batches)
-        enqueue_kernel(q, k.place_subtrees, n, begin, n, b.records.buffer(), subtree_nodes.buffer(),
-                       subtree_refs.buffer(), position.buffer(), leaf_position.buffer());
-    leaf_index_count = read_uint(q, subtree_refs, 0);
-    if (leaf_index_count > KDRAY_MAX_OFFSET)
-        throw Error("OpenCL kd-tree build: " + std::to_string(leaf_index_count) +
-                    " leaf references exceed the layout's limit of " +
-                    std::to_string(KDRAY_MAX_OFFSET));
-    DeviceArray nodes = b.allocate(count * sizeof(KdNode), "kd-tree nodes");
-    leaf_indices = b.allocate(std::size_t(leaf_index_count) * 4, "kd-tree leaf indices");
-    enqueue_kernel(q, k.write_nodes, records, cl_uint(records), b.records.buffer(),
-                   position.buffer(), leaf_position.buffer(), b.leaf_store.buffer(), nodes.buffer(),
-                   leaf_indices.buffer());
-    const cl::Buffer& second = b.subtree_nodes[b.subtree_nodes[1].bytes() ? 1 : 0].buffer();
-    enqueue_kernel(q, k.write_small, b.small_roots, b.small_roots, b.small_first.id.buffer(),
-                   b.root_ref_start.buffer(), b.root_ref_count.buffer(), b.budget_scale[0],
-                   b.subtree_nodes[0].buffer(), b.budget_scale[1], second,
-                   b.subtree_node_count.buffer(), position.buffer(), leaf_position.buffer(),
-                   b.small_ref_tri.buffer(), nodes.buffer(), leaf_indices.buffer());
-    return nodes;
-}
-
 }  // namespace
+}  // namespace build_detail
+
+using namespace build_detail;
 
 void prepare_opencl_builder(ClDevice& device, [[maybe_unused]] const BuildParams& params) {
     const Kernels kernels(device);
