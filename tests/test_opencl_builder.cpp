@@ -72,6 +72,21 @@ Scene two_clusters() {
     return make_scene(std::move(tris), "two_clusters");
 }
 
+Scene cluster_in_corner() {
+    // 100 triangles exactly filling the unit cube (as in two_clusters) and one small triangle at
+    // the far corner (10, 10, 10). The root's median x = 5 leaves the cluster in a child of box
+    // [0, 5] x [0, 10] x [0, 10] with empty slabs of 80%, 90% and 90% of its extent: three
+    // empty-space cuts in a row (y = 1, then z = 1, then x = 1), which kd_split_large_nodes
+    // chains in one level (§4.1, one level per cut in the paper) before the median split.
+    std::vector<float> tris = {0, 0, 0, 1, 0, 1, 0, 1, 1};
+    for (int i = 1; i < 100; ++i) {
+        const float x = 0.01f * i, y = 0.005f * i, z = 0.009f * i;
+        tris.insert(tris.end(), {x, y, z, x, y + 0.1f, z, x, y, z + 0.05f});
+    }
+    tris.insert(tris.end(), {9.5f, 9.5f, 10, 10, 9.5f, 10, 10, 10, 9.5f});
+    return make_scene(std::move(tris), "cluster_in_corner");
+}
+
 }  // namespace
 
 TEST_CASE("opencl builder: hard scenes pass the checker and trace like brute force") {
@@ -124,6 +139,36 @@ TEST_CASE("opencl builder: empty space is cut off around two far clusters") {
     const KdNode above_below = tree.nodes[above_index + 1];
     CHECK(kd_node_is_leaf(above_below));
     CHECK(kd_leaf_count(above_below) == 0);
+}
+
+TEST_CASE("opencl builder: a chain of empty-space cuts in one level") {
+    // The chain's nodes are each other's parents although one level creates them all: the
+    // output stage must still place every subtree (ids by generation), and the tree must be the
+    // one a level per cut gives.
+    const Scene scene = cluster_in_corner();
+    check_build(scene, "cluster_in_corner");
+    BuildReport report;
+    const KdTree tree = build_opencl(test::opencl_test_device(), scene, {}, &report);
+    REQUIRE(check_tree(tree, scene).empty());
+    CHECK(report.large_node_levels == 2);  // the root; the chain and its median split
+    REQUIRE(!kd_node_is_leaf(tree.nodes[0]));
+    CHECK(kd_node_split(tree.nodes[0]) == 5.0f);
+    const int axes[3] = {1, 2, 0};
+    kd_u32 at = 1;  // the root's below child, then each cut's kept (below) child
+    for (int cut = 0; cut < 3; ++cut) {
+        CAPTURE(cut);
+        const KdNode node = tree.nodes[at];
+        REQUIRE(!kd_node_is_leaf(node));
+        CHECK(kd_node_axis(node) == kd_u32(axes[cut]));
+        CHECK(kd_node_split(node) == 1.0f);
+        const KdNode empty = tree.nodes[kd_node_above_child(node)];
+        CHECK(kd_node_is_leaf(empty));
+        CHECK(kd_leaf_count(empty) == 0);
+        at += 1;
+    }
+    // The chain's last node: the median of the unit cube.
+    REQUIRE(!kd_node_is_leaf(tree.nodes[at]));
+    CHECK(kd_node_split(tree.nodes[at]) == 0.5f);
 }
 
 TEST_CASE("opencl builder: empty scene, report, and programs built once") {
