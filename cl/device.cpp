@@ -61,7 +61,13 @@ std::vector<FoundDevice> find_devices() {
     std::vector<cl::Platform> platforms;
     // The ICD loader reports "no platform" as an error code (CL_PLATFORM_NOT_FOUND_KHR) rather than
     // an empty list.
-    const cl_int status = cl::Platform::get(&platforms);
+    // With CL_HPP_ENABLE_EXCEPTIONS the bindings throw that code instead of returning it.
+    cl_int status = CL_SUCCESS;
+    try {
+        status = cl::Platform::get(&platforms);
+    } catch (const cl::Error& e) {
+        status = e.err();
+    }
     if (status != CL_SUCCESS || platforms.empty())
         throw Error(
             "no OpenCL platform found (clGetPlatformIDs: " + cl_error_name(status) +
