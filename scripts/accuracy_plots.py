@@ -68,7 +68,8 @@ def tables_markdown(header, tree_rows, image_rows, robust_rows):
     out.append("\n## Which tree setting gives the fastest frame\n\n"
                "Dynamic: rebuilt every frame (frame = build + trace). Static: built once, traced "
                "many times (frame = trace). Primary + shadow rays, one light, max_depth 1. "
-               "Dynamic figures are the median frame, static ones the best of the repeats.\n\n")
+               "Dynamic figures are the median frame, static ones the best of the repeats; "
+               "each the best of the rounds.\n\n")
     pct = lambda a, b: f"{100.0 * (a / b - 1):+.0f}%"  # noqa: E731
     out.append(_table([
         ("scene", lambda b: f"{b['scene']} ({b['kind']}, {b['triangles']} tris)"),
