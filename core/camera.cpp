@@ -33,26 +33,21 @@ CameraRays::CameraRays(const Camera& camera, int width_, int height_)
     up = cross(right, forward);
     tan_half_fov = std::tan(camera.fov_y * 0.5f * static_cast<float>(std::numbers::pi) / 180.0f);
     aspect = static_cast<float>(width) / static_cast<float>(height);
-}
-
-KdView CameraRays::view() const {
-    KdView v{};
+    view_ = KdView{};
     for (int a = 0; a < 3; ++a) {
-        v.origin[a] = origin[a];
-        v.forward[a] = forward[a];
-        v.right[a] = right[a];
-        v.up[a] = up[a];
+        view_.origin[a] = origin[a];
+        view_.forward[a] = forward[a];
+        view_.right[a] = right[a];
+        view_.up[a] = up[a];
     }
-    v.tan_half_fov = tan_half_fov;
-    v.aspect = aspect;
-    v.width = static_cast<kd_u32>(width);
-    v.height = static_cast<kd_u32>(height);
-    return v;
+    view_.tan_half_fov = tan_half_fov;
+    view_.aspect = aspect;
+    view_.width = static_cast<kd_u32>(width);
+    view_.height = static_cast<kd_u32>(height);
 }
 
 KdRay CameraRays::ray(float px, float py) const {
-    const KdView v = view();
-    return kd_camera_ray(&v, px, py);
+    return kd_camera_ray(&view_, px, py);
 }
 
 Camera frame_bounds(const Aabb& bounds, float fov_y) {

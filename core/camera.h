@@ -21,7 +21,10 @@ struct CameraRays {
     KdRay ray(float px, float py) const;
     /// The camera part of the shared KdView (origin, basis, tan_half_fov, aspect, size); the
     /// render settings' fields are left zero.
-    KdView view() const;
+    const KdView& view() const { return view_; }
+
+  private:
+    KdView view_;  // the fields above in the shared layout, made once: ray() runs per pixel
 };
 
 /// A camera that looks at a scene's bounds from the front (+z), used when no render file gives one.

@@ -345,11 +345,11 @@ KDRAY_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView* vie
     const kd_f32 cx = (kd_f32)x + 0.5f, cy = (kd_f32)y + 0.5f;
     if (view->spp > 1u) {
         /* The AOV always comes from the centre ray (conventions.md), an extra primary ray. */
-        out.centre_hit = kd_scene_closest(scene, kd_camera_ray(view, cx, cy));
+        const KdRay centre = kd_camera_ray(view, cx, cy);
+        out.centre_hit = kd_scene_closest(scene, centre);
         out.rays.primary += 1u;
         kd_set3(out.normal, 0.0f, 0.0f, 0.0f);
         if (out.centre_hit.prim != KDRAY_NO_HIT) {
-            const KdRay centre = kd_camera_ray(view, cx, cy);
             kd_facing_normal(
                 scene->triangles + (size_t)out.centre_hit.prim * KDRAY_FLOATS_PER_TRIANGLE,
                 centre.dir, out.normal);

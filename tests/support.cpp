@@ -97,6 +97,15 @@ std::vector<NamedScene> hard_scenes() {
     return scenes;
 }
 
+KdRay make_ray(Vec3 org, Vec3 dir, float tmin, float tmax) {
+    KdRay r;
+    r.org[0] = org.x, r.org[1] = org.y, r.org[2] = org.z;
+    r.dir[0] = dir.x, r.dir[1] = dir.y, r.dir[2] = dir.z;
+    r.tmin = tmin;
+    r.tmax = tmax;
+    return r;
+}
+
 std::vector<KdRay> random_rays(const Scene& scene, int count, std::uint32_t seed) {
     std::mt19937 rng(seed);
     Aabb b = scene.bounds();
@@ -107,14 +116,6 @@ std::vector<KdRay> random_rays(const Scene& scene, int count, std::uint32_t seed
         return Vec3{b.lo.x - grow * scale + unit(rng) * (e.x + 2 * grow * scale),
                     b.lo.y - grow * scale + unit(rng) * (e.y + 2 * grow * scale),
                     b.lo.z - grow * scale + unit(rng) * (e.z + 2 * grow * scale)};
-    };
-    auto make = [](Vec3 o, Vec3 d) {
-        KdRay r;
-        r.org[0] = o.x, r.org[1] = o.y, r.org[2] = o.z;
-        r.dir[0] = d.x, r.dir[1] = d.y, r.dir[2] = d.z;
-        r.tmin = 0.0f;
-        r.tmax = INFINITY;
-        return r;
     };
     std::vector<KdRay> rays;
     for (int i = 0; i < count; ++i) {
@@ -135,7 +136,7 @@ std::vector<KdRay> random_rays(const Scene& scene, int count, std::uint32_t seed
             d = point_in(0.0f) - o;
             if (dot(d, d) == 0.0f) d = {0, 0, 1};
         }
-        rays.push_back(make(o, normalize(d)));
+        rays.push_back(make_ray(o, normalize(d)));
     }
     return rays;
 }

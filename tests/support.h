@@ -2,12 +2,14 @@
 // builder and tracer must survive. Each generator says why its scene is hard.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include "core/kd_shared.h"
+#include "core/math.h"
 #include "core/scene.h"
 
 namespace kdray::test {
@@ -33,6 +35,9 @@ struct NamedScene {
     Scene scene;
 };
 std::vector<NamedScene> hard_scenes();
+
+/// A ray from org along dir (not normalised) over [tmin, tmax].
+KdRay make_ray(Vec3 org, Vec3 dir, float tmin = 0.0f, float tmax = INFINITY);
 
 /// Rays aimed at random points of the scene's box from outside and inside it, plus rays parallel
 /// to the axes and rays starting exactly on triangle-box boundaries (split plane candidates).

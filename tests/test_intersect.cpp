@@ -11,20 +11,14 @@
 #include <vector>
 
 #include "core/kd_traverse.h"
-#include "core/scene.h"
 #include "core/math.h"
+#include "core/scene.h"
+#include "tests/support.h"
 
 namespace kdray {
 namespace {
 
-KdRay make_ray(Vec3 org, Vec3 dir, float tmin = 0.0f, float tmax = INFINITY) {
-    KdRay r;
-    r.org[0] = org.x, r.org[1] = org.y, r.org[2] = org.z;
-    r.dir[0] = dir.x, r.dir[1] = dir.y, r.dir[2] = dir.z;
-    r.tmin = tmin;
-    r.tmax = tmax;
-    return r;
-}
+using test::make_ray;
 
 KdHit no_hit(float tmax = INFINITY) {
     return KdHit{tmax, KDRAY_NO_HIT, 0.0f, 0.0f};

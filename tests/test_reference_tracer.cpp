@@ -30,14 +30,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-KdRay make_ray(Vec3 org, Vec3 dir) {
-    KdRay r;
-    r.org[0] = org.x, r.org[1] = org.y, r.org[2] = org.z;
-    r.dir[0] = dir.x, r.dir[1] = dir.y, r.dir[2] = dir.z;
-    r.tmin = 0.0f;
-    r.tmax = INFINITY;
-    return r;
-}
+using test::make_ray;
 
 /// A tree of one leaf holding every triangle: the walk reduces to the root clip and brute force.
 KdTree single_leaf_tree(const Scene& scene) {

@@ -68,6 +68,19 @@ __kernel void kd_compact_by_flags(__global const uint* values, __global const ui
     if (k < n && flags[k]) out[positions[k]] = values[k];
 }
 
+/* out = the union of boxes[first .. end) (6 floats each: lo.xyz hi.xyz); an empty range gives
+ * lo = +inf, hi = -inf. Both steps of the segmented reduction below are this loop. */
+inline void kd_union_boxes(__global const float* boxes, uint first, uint end, __global float* out) {
+    float3 bmin = (float3)(INFINITY), bmax = (float3)(-INFINITY);
+    for (uint k = first; k < end; ++k) {
+        __global const float* b = boxes + (size_t)k * 6;
+        bmin = fmin(bmin, (float3)(b[0], b[1], b[2]));
+        bmax = fmax(bmax, (float3)(b[3], b[4], b[5]));
+    }
+    out[0] = bmin.x, out[1] = bmin.y, out[2] = bmin.z;
+    out[3] = bmax.x, out[4] = bmax.y, out[5] = bmax.z;
+}
+
 /* Segmented reduction, chunks of at most KDRAY_REDUCE_CHUNK elements: segment s covers
  * boxes [seg_start[s], seg_start[s] + seg_count[s]) and owns chunks [chunk_start[s],
  * chunk_start[s + 1]), ceil(count / chunk) of them. Work-item c finds its segment by binary
@@ -93,15 +106,7 @@ __kernel void kd_reduce_box_chunks(__global const float* boxes, __global const u
     const uint local_chunk = c - chunk_start[s];
     const uint begin = seg_start[s] + local_chunk * KDRAY_REDUCE_CHUNK;
     const uint end = min(seg_start[s] + seg_count[s], begin + KDRAY_REDUCE_CHUNK);
-    float3 bmin = (float3)(INFINITY), bmax = (float3)(-INFINITY);
-    for (uint k = begin; k < end; ++k) {
-        __global const float* b = boxes + (size_t)k * 6;
-        bmin = fmin(bmin, (float3)(b[0], b[1], b[2]));
-        bmax = fmax(bmax, (float3)(b[3], b[4], b[5]));
-    }
-    __global float* o = chunk_boxes + (size_t)c * 6;
-    o[0] = bmin.x, o[1] = bmin.y, o[2] = bmin.z;
-    o[3] = bmax.x, o[4] = bmax.y, o[5] = bmax.z;
+    kd_union_boxes(boxes, begin, end, chunk_boxes + (size_t)c * 6);
 }
 
 /* Segmented reduction, step 2: segment s's box is the union of its chunks' boxes. */
@@ -110,15 +115,7 @@ __kernel void kd_reduce_box_segments(__global const float* chunk_boxes,
                                      __global float* seg_boxes) {
     const uint s = get_global_id(0);
     if (s >= segments) return;
-    float3 bmin = (float3)(INFINITY), bmax = (float3)(-INFINITY);
-    for (uint c = chunk_start[s]; c < chunk_start[s + 1]; ++c) {
-        __global const float* b = chunk_boxes + (size_t)c * 6;
-        bmin = fmin(bmin, (float3)(b[0], b[1], b[2]));
-        bmax = fmax(bmax, (float3)(b[3], b[4], b[5]));
-    }
-    __global float* o = seg_boxes + (size_t)s * 6;
-    o[0] = bmin.x, o[1] = bmin.y, o[2] = bmin.z;
-    o[3] = bmax.x, o[4] = bmax.y, o[5] = bmax.z;
+    kd_union_boxes(chunk_boxes, chunk_start[s], chunk_start[s + 1], seg_boxes + (size_t)s * 6);
 }
 
 /* Chunks per segment, for the scan that gives chunk_start: ceil(count / KDRAY_REDUCE_CHUNK). */
