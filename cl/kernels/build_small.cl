@@ -15,13 +15,30 @@
  * Candidates are the boundaries of the root's (clipped) triangle boxes: candidate 6*ref + 2*axis
  * + side lies at the box's lo (side 0) or hi (side 1) on that axis. side_masks holds 16 masks per
  * reference, [16 ref + k] the triangles below its candidate k and [16 ref + 8 + k] those above
- * (k < 6; two lanes of padding each), so that the kernels read a reference's masks as two ulong8. */
+ * (k < 6; two lanes of padding each), so that the kernels read a reference's masks as two ulong8.
+ *
+ * Triangles lying in a candidate plane go to the cheaper side, as in the reference builder (Wald &
+ * Havran 2006, "p_side"): a triangle that is flat on an axis has its lo and hi candidates at the
+ * same plane, so the two lanes carry the two choices, lo with the plane's flat triangles below
+ * and hi with them above, and the SAH search prices both without a lane more. The same two lanes
+ * let a node cut its flat triangles off at its own face (a flat child, e.g. a wall): the lo lane
+ * at the node's lo face, the hi lane at its hi face. Planar triangles below only cost the BART
+ * Robots 13% of SAH (reference builder forced to that choice: 553.8 -> 623.8). */
 #include "cl/kernels/build_common.cl"
+
+/* The lanes (of a reference's six candidates, lane 2 * axis + side at pos) whose planar triangles
+ * go above: the hi lanes of the axes on which the reference is flat (lo and hi at one plane). */
+inline int8 kd_planar_above_lanes(float8 pos) {
+    const int8 odd = (int8)(0, -1, 0, -1, 0, -1, 0, 0);
+    return odd & (pos == pos.s00224466);
+}
 
 /* Split candidates (§4.2, "small node preprocessing"): for each candidate plane the set of the
  * root's triangles below it and the set above it, by the same rule as every split (kd_classify
  * with the planar side below: below when lo < plane or when not hi > plane, above when
- * hi > plane). One work-item per reference computes its six candidates together in the lanes of
+ * hi > plane), except in the hi lane of an axis on which the reference is flat, where triangles
+ * lying in the plane go above (below when lo < plane, above when hi > plane or lo >= plane).
+ * One work-item per reference computes its six candidates together in the lanes of
  * one float8 (two lanes unused), so each box of the root is loaded once for six planes; the
  * work-items of one root run the same loop, which keeps GPU lanes converged. Per plane, one
  * scalar loop over the root took 86 ms of CPU per kitchen build (perf); this one 24 ms. */
@@ -35,6 +52,7 @@ __kernel void kd_compute_split_masks(uint refs, __global const float* ref_box,
     __global const float* own = ref_box + (size_t)ref * 6;
     /* Lane k = 2 * axis + side: candidate k, at lo (side 0) or hi (side 1) on the axis. */
     const float8 pos = (float8)(own[0], own[3], own[1], own[4], own[2], own[5], 0.0f, 0.0f);
+    const int8 planar_above = kd_planar_above_lanes(pos);
     const uint root = ref_root[ref];
     const uint start = root_ref_start[root], count = root_ref_count[root];
     ulong8 below = (ulong8)(0), above = (ulong8)(0);
@@ -42,8 +60,9 @@ __kernel void kd_compute_split_masks(uint refs, __global const float* ref_box,
         __global const float* b = ref_box + (size_t)(start + j) * 6;
         const float8 lo = (float8)(b[0], b[0], b[1], b[1], b[2], b[2], 0.0f, 0.0f);
         const float8 hi = (float8)(b[3], b[3], b[4], b[4], b[5], b[5], 0.0f, 0.0f);
-        const int8 is_above = hi > pos; /* -1 where true */
-        const int8 is_below = (lo < pos) | ~is_above;
+        const int8 crosses_up = hi > pos; /* -1 where true */
+        const int8 is_above = crosses_up | (planar_above & (lo >= pos));
+        const int8 is_below = (lo < pos) | (~planar_above & ~crosses_up);
         below |= convert_ulong8(is_below & 1) << (ulong)j;
         above |= convert_ulong8(is_above & 1) << (ulong)j;
     }
@@ -52,11 +71,35 @@ __kernel void kd_compute_split_masks(uint refs, __global const float* ref_box,
 }
 
 
-/* The SAH split of one small node (§4.2): for every candidate of the node's triangles that lies
- * strictly inside the node's box, SAH(x) = C_t + C_i (N_L SA_L + N_R SA_R) / SA, the counts by
- * popcount of the node's mask and the candidate's masks, scaled by (1 - empty_bonus) when a side
- * is empty as in the reference builder. Returns the cheapest candidate (6 * ref + k), or
- * KDRAY_NO_CANDIDATE when C_i N is no more than the best: the node becomes a leaf.
+/* The children of a node (its triangles `node`) for the six candidates of one reference, at pos
+ * (lanes as in kd_compute_split_masks), given the candidates' masks: inside the node's box (lo,
+ * hi per lane) the masks themselves; at the node's lo face, the lo lanes make a flat child below
+ * of the triangles lying in the face (below and not above) and leave the rest above; at its hi
+ * face, the hi lanes make a flat child above of those lying there (above and not below). The
+ * masks are over the small root's boxes, which a node's box does not clip, so on a face they
+ * would also count the triangles that only extend past it. Lanes that split nothing (other
+ * candidates on a face, lanes 6 and 7) get no child at all: *valid is 0 there. */
+inline void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above, float8 pos, float8 lo,
+                                  float8 hi, ulong8* below_out, ulong8* above_out,
+                                  long8* valid) {
+    const int8 lo_lane = (int8)(-1, 0, -1, 0, -1, 0, 0, 0);
+    const int8 hi_lane = (int8)(0, -1, 0, -1, 0, -1, 0, 0);
+    below &= node;
+    above &= node;
+    const long8 at_lo = convert_long8(lo_lane & (pos == lo));
+    const long8 at_hi = convert_long8(hi_lane & (pos == hi));
+    const ulong8 flat_below = below & ~above, flat_above = above & ~below;
+    *below_out = select(select(below, node & ~flat_above, at_hi), flat_below, at_lo);
+    *above_out = select(select(above, flat_above, at_hi), node & ~flat_below, at_lo);
+    *valid = convert_long8((lo_lane | hi_lane) & (pos > lo) & (pos < hi)) | at_lo | at_hi;
+}
+
+/* The SAH split of one small node (§4.2): for every candidate of the node's triangles inside the
+ * node's box, or on its faces as kd_candidate_children allows, SAH(x) = C_t + C_i (N_L SA_L +
+ * N_R SA_R) / SA, the counts by popcount of the children's masks, scaled by (1 - empty_bonus)
+ * when a side with some width is empty, as in the reference builder. Returns the cheapest
+ * candidate (6 * ref + k), or KDRAY_NO_CANDIDATE when C_i N is no more than the best: the node
+ * becomes a leaf.
  *
  * Only the candidates of the node's own triangles (the set bits of its mask) are evaluated: the
  * SAH is piecewise linear between those boundaries, so its minimum lies on one of them. */
@@ -84,15 +127,18 @@ inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global cons
         const uint ref = start + (uint)popcount((rest & (0ul - rest)) - 1ul); /* lowest set bit */
         __global const float* b = ref_box + (size_t)ref * 6;
         const float8 pos = (float8)(b[0], b[3], b[1], b[4], b[2], b[5], 0, 0);
-        const ulong8 below = node & vload8(0, side_masks + (size_t)ref * 16);
-        const ulong8 above = node & vload8(1, side_masks + (size_t)ref * 16);
+        ulong8 below, above;
+        long8 valid;
+        kd_candidate_children(node, vload8(0, side_masks + (size_t)ref * 16),
+                              vload8(1, side_masks + (size_t)ref * 16), pos, lo, hi, &below,
+                              &above, &valid);
         const float8 n_below = convert_float8(popcount(below));
         const float8 n_above = convert_float8(popcount(above));
         float8 cost = cost_traversal + cost_scale * (n_below * (cross + (pos - lo) * ring) +
                                                      n_above * (cross + (hi - pos) * ring));
-        cost = select(cost, cost * (1.0f - empty_bonus), convert_int8((below == 0) | (above == 0)));
-        /* Only planes strictly inside the node split it (lanes 6 and 7: 0 < 0 is false). */
-        cost = select((float8)(INFINITY), cost, convert_int8((pos > lo) & (pos < hi)));
+        const int8 empty = ((n_below == 0.0f) & (pos > lo)) | ((n_above == 0.0f) & (pos < hi));
+        cost = select(cost, cost * (1.0f - empty_bonus), empty);
+        cost = select((float8)(INFINITY), cost, convert_int8(valid));
         /* The first cheapest candidate wins, in candidate order, as a scalar loop would pick. */
         const float lane[6] = {cost.s0, cost.s1, cost.s2, cost.s3, cost.s4, cost.s5};
         for (uint k = 0; k < 6; ++k) {
@@ -169,17 +215,33 @@ __kernel void kd_build_small_subtrees(
         }
         /* Inner node: go on with the below child, keep the above child for later. */
         const uint ref = best / 6, k = best % 6, axis = k / 2;
-        const float split = ref_box[(size_t)ref * 6 + (k % 2) * 3 + axis];
+        __global const float* b = ref_box + (size_t)ref * 6;
+        const float split = b[(k % 2) * 3 + axis];
+        ulong children[2][8];
+        {
+            const float8 pos = (float8)(b[0], b[3], b[1], b[4], b[2], b[5], 0, 0);
+            const KdBox nb = node.box;
+            ulong8 below, above;
+            long8 valid;
+            kd_candidate_children(
+                (ulong8)(node.mask), vload8(0, side_masks + (size_t)ref * 16),
+                vload8(1, side_masks + (size_t)ref * 16), pos,
+                (float8)(nb.lo.x, nb.lo.x, nb.lo.y, nb.lo.y, nb.lo.z, nb.lo.z, 0, 0),
+                (float8)(nb.hi.x, nb.hi.x, nb.hi.y, nb.hi.y, nb.hi.z, nb.hi.z, 0, 0), &below,
+                &above, &valid);
+            vstore8(below, 0, children[0]);
+            vstore8(above, 0, children[1]);
+        }
         if (at < budget) out[at] = (uint4)(axis, as_uint(split), 0, 0);
         KdPendingNode above;
         above.box = kd_child_box(node.box, axis, split, 1);
-        above.mask = node.mask & side_masks[(size_t)ref * 16 + 8 + k];
+        above.mask = children[1][k];
         above.depth = node.depth + 1;
         above.parent = at;
         above.parent_axis = axis;
         stack[top++] = above;
         node.box = kd_child_box(node.box, axis, split, 0);
-        node.mask &= side_masks[(size_t)ref * 16 + k];
+        node.mask = children[0][k];
         node.depth += 1;
         node.parent = KDRAY_NO_CANDIDATE;
     }
