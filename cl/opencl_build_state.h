@@ -21,11 +21,12 @@ constexpr cl_uint kSmallRootAxis = 4;
 
 /// The builder's kernels, from programs built once per device and options (program cache).
 struct Kernels {
-    cl::Kernel compute_aabbs, split_large, classify, count_large, emit_large, distribute;
+    cl::Kernel compute_aabbs, bin_large, split_large, classify, count_large, emit_large, distribute;
     cl::Kernel split_masks, build_subtrees;
     cl::Kernel size_subtrees, place_subtrees, write_nodes, write_small;
 
-    explicit Kernels(const ClDevice& device);
+    /// large_split_bins: BuildParams::large_split_bins, compiled into the large stage's program.
+    Kernels(const ClDevice& device, int large_split_bins);
 };
 
 /// The small roots (structure of arrays, one entry per root): box, depth and node id.
@@ -40,7 +41,7 @@ struct Build {
           queue(d.queue()),
           memory(d),
           primitives(d),
-          kernels(d),
+          kernels(d, p.large_split_bins),
           params(p),
           triangles(static_cast<cl_uint>(triangle_count)) {}
 

@@ -66,12 +66,15 @@ std::string build_defines() {
 
 }  // namespace
 
-Kernels::Kernels(const ClDevice& device) {
+Kernels::Kernels(const ClDevice& device, int large_split_bins) {
     const std::string defines = build_defines();
-    const cl::Program large = cached_program(device, "build_large.cl", defines);
+    const cl::Program large =
+        cached_program(device, "build_large.cl",
+                       defines + " -DKDRAY_LARGE_BINS=" + std::to_string(large_split_bins) + "u");
     const cl::Program small = cached_program(device, "build_small.cl", defines);
     const cl::Program output = cached_program(device, "build_output.cl", defines);
     compute_aabbs = make_kernel(large, "kd_compute_aabbs");
+    if (large_split_bins > 0) bin_large = make_kernel(large, "kd_bin_large_chunks");
     split_large = make_kernel(large, "kd_split_large_nodes");
     classify = make_kernel(large, "kd_classify_references");
     count_large = make_kernel(large, "kd_count_large_children");
@@ -187,11 +190,20 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
         DeviceArray cut_count = b.allocate(nodes * 4, "empty-space cuts per node");
         DeviceArray cut_code = b.allocate(std::size_t(nodes) * kMaxCuts * 4, "empty-space cuts");
         DeviceArray cut_pos = b.allocate(std::size_t(nodes) * kMaxCuts * 4, "empty-space planes");
+        const unsigned bins = unsigned(b.params.large_split_bins);
+        DeviceArray chunk_bins =
+            b.allocate(std::size_t(chunks) * 6 * std::max(1u, bins) * 4, "large node SAH bins");
+        if (bins > 0 && !force_leaf)
+            enqueue_kernel(q, k.bin_large, chunks, ref_box.buffer(), node_start.buffer(),
+                           node_count.buffer(), node_chunk.buffer(), nodes, chunks,
+                           node_box.buffer(), tight.buffer(), chunk_bins.buffer());
         enqueue_kernel(q, k.split_large, nodes, nodes, node_box.buffer(), tight.buffer(),
                        node_depth.buffer(), cl_uint(max_depth), force_leaf,
-                       cl_float(b.params.empty_space_ratio), split_axis.buffer(),
-                       split_pos.buffer(), planar.buffer(), cut_count.buffer(), cut_code.buffer(),
-                       cut_pos.buffer());
+                       cl_float(b.params.empty_space_ratio), node_chunk.buffer(),
+                       node_count.buffer(), chunk_bins.buffer(), cl_float(b.params.costs.traversal),
+                       cl_float(b.params.costs.intersection), cl_float(b.params.empty_bonus),
+                       split_axis.buffer(), split_pos.buffer(), planar.buffer(), cut_count.buffer(),
+                       cut_code.buffer(), cut_pos.buffer());
 
         /* Classify references, then rank them within their children by one scan. */
         DeviceArray rank = b.allocate((2 * std::size_t(refs) + 1) * 4, "reference ranks");
@@ -276,8 +288,8 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
 
 using namespace build_detail;
 
-void prepare_opencl_builder(ClDevice& device, [[maybe_unused]] const BuildParams& params) {
-    const Kernels kernels(device);
+void prepare_opencl_builder(ClDevice& device, const BuildParams& params) {
+    const Kernels kernels(device, std::clamp(params.large_split_bins, 0, kMaxLargeSplitBins));
     const ClPrimitives primitives(device);
 }
 
@@ -296,6 +308,7 @@ KdTree detail::build_opencl_with_subtree_budget(ClDevice& device, const Scene& s
     tree.params = params;
     tree.params.max_depth = std::clamp(params.max_depth, 0, KDRAY_MAX_DEPTH);
     tree.params.large_node_threshold = std::clamp(params.large_node_threshold, 1, 64);
+    tree.params.large_split_bins = std::clamp(params.large_split_bins, 0, kMaxLargeSplitBins);
     tree.builder = "opencl";
     if (report) *report = BuildReport{};
     const std::size_t n = scene.triangle_count();

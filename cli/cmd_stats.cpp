@@ -25,6 +25,7 @@ nlohmann::json defaults_json(const BuilderOptions& o) {
             {"cost_intersection", p.costs.intersection},
             {"large_node_threshold", p.large_node_threshold},
             {"empty_space_ratio", p.empty_space_ratio},
+            {"large_split_bins", p.large_split_bins},
             {"empty_bonus", p.empty_bonus},
             {"max_depth", p.max_depth}};
 }

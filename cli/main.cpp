@@ -37,6 +37,11 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
                    "node's extent (Zhou et al.'s C_e)")
         ->check(CLI::Range(0.0f, 1.0f))
         ->capture_default_str();
+    app.add_option("--large-bins", o.params.large_split_bins,
+                   "OpenCL builder: split a large node at the cheapest by the SAH of this many "
+                   "bins per axis of its tight box; 0: at the spatial median (Zhou et al.)")
+        ->check(CLI::Range(0, kdray::kMaxLargeSplitBins))
+        ->capture_default_str();
     app.add_option("--max-depth", o.params.max_depth, "deepest tree level")
         ->check(CLI::Range(1, KDRAY_MAX_DEPTH))
         ->capture_default_str();

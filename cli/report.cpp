@@ -30,6 +30,8 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
     if (tree.builder == "opencl") {
         j["params"]["large_node_threshold"] = p.large_node_threshold;
         j["params"]["empty_space_ratio"] = p.empty_space_ratio;
+        j["params"]["large_split_bins"] = p.large_split_bins;
+        j["params"]["empty_bonus"] = p.empty_bonus;
         j["large_node_levels"] = built.report.large_node_levels;
         j["small_node_levels"] = built.report.small_node_levels;
         j["device_bytes"] = built.report.device_bytes;

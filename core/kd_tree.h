@@ -21,6 +21,9 @@ struct SahCosts {
 
 /// Build parameters. The reference builder uses costs, empty_bonus and max_depth; the OpenCL
 /// builder of Zhou et al. (2008) uses them all.
+/// Most SAH bins a large node of the OpenCL builder may use (BuildParams::large_split_bins).
+inline constexpr int kMaxLargeSplitBins = 64;
+
 struct BuildParams {
     SahCosts costs;
     /// Reference builder: a split with an empty side has its cost scaled by (1 - empty_bonus).
@@ -30,6 +33,10 @@ struct BuildParams {
     int large_node_threshold = 64;
     /// Zhou et al. C_e: cut off empty space when the empty slab exceeds this share of the extent.
     float empty_space_ratio = 0.25f;
+    /// OpenCL builder: a large node (after its empty-space cuts) splits at the cheapest by the SAH
+    /// of this many equal bins per axis of its tight box; 0 splits it at the spatial median of
+    /// its longest axis, as Zhou et al. do. At most kMaxLargeSplitBins.
+    int large_split_bins = 32;
     int max_depth = KDRAY_MAX_DEPTH;
 };
 

@@ -103,6 +103,7 @@ void write_tree_file(const std::filesystem::path& path, const KdTree& tree, cons
     w.put(p.empty_bonus);
     w.put(std::int32_t(p.large_node_threshold));
     w.put(p.empty_space_ratio);
+    w.put(std::int32_t(p.large_split_bins));
     w.put(std::int32_t(p.max_depth));
     for (int a = 0; a < 3; ++a) w.put(tree.bounds.lo[a]);
     for (int a = 0; a < 3; ++a) w.put(tree.bounds.hi[a]);
@@ -134,6 +135,7 @@ TreeFile read_tree_file(const std::filesystem::path& path) {
     p.empty_bonus = r.get<float>();
     p.large_node_threshold = r.get<std::int32_t>();
     p.empty_space_ratio = r.get<float>();
+    p.large_split_bins = r.get<std::int32_t>();
     p.max_depth = r.get<std::int32_t>();
     for (int a = 0; a < 3; ++a) f.tree.bounds.lo[a] = r.get<float>();
     for (int a = 0; a < 3; ++a) f.tree.bounds.hi[a] = r.get<float>();

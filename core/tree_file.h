@@ -12,7 +12,7 @@
 
 namespace kdray {
 
-inline constexpr std::uint32_t kTreeFileVersion = 1;
+inline constexpr std::uint32_t kTreeFileVersion = 2;
 
 struct TreeFile {
     KdTree tree;

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cl/opencl_builder.h"
@@ -117,6 +118,31 @@ Scene box_room() {
     return make_scene(std::move(tris), "box_room");
 }
 
+Scene uneven_clusters() {
+    // 100 triangles in the unit cube and 10 in [3, 4] x [0, 1]^2, each spanning its cube in x
+    // (the first also in y and z, so that the cubes are the clusters' bounds). Every plane in the
+    // gap has the same counts, 100 below and 10 above, and every plane inside a cluster cuts all
+    // of its triangles, so the SAH is least at the dense cluster's face, x = 1: a bin boundary of
+    // the root's tight box [0, 4] (32 bins of 0.125) that the triangles' ends lie exactly on,
+    // which the bins must not count on both sides. The median is x = 2.
+    std::vector<float> tris;
+    for (auto [offset, count] : {std::pair{0.0f, 100}, std::pair{3.0f, 10}}) {
+        tris.insert(tris.end(), {offset, 0, 0, offset + 1, 0, 1, offset, 1, 1});
+        for (int i = 1; i < count; ++i) {
+            const float y = 0.009f * float(i), z = 0.008f * float(i);
+            tris.insert(tris.end(), {offset, y, z, offset + 1, y + 0.05f, z, offset, y, z + 0.05f});
+        }
+    }
+    return make_scene(std::move(tris), "uneven_clusters");
+}
+
+// The paper's large-node split, the spatial median, which some tests pin down.
+BuildParams median_split() {
+    BuildParams params;
+    params.large_split_bins = 0;
+    return params;
+}
+
 }  // namespace
 
 TEST_CASE("opencl builder: hard scenes pass the checker and trace like brute force") {
@@ -160,9 +186,26 @@ TEST_CASE("opencl builder: planar triangles take the cheaper side, flat faces be
     CHECK(gpu_cost <= 1.05 * ref_cost);
 }
 
+TEST_CASE("opencl builder: large nodes split at the binned SAH plane, or at the median") {
+    const Scene scene = uneven_clusters();
+    check_build(scene, "uneven_clusters");
+    BuildParams params;
+    params.large_split_bins = 32;
+    const KdTree sah = build_opencl(test::opencl_test_device(), scene, params);
+    REQUIRE(check_tree(sah, scene).empty());
+    REQUIRE(!kd_node_is_leaf(sah.nodes[0]));
+    CHECK(kd_node_axis(sah.nodes[0]) == 0);
+    CHECK(kd_node_split(sah.nodes[0]) == 1.0f);
+    const KdTree median = build_opencl(test::opencl_test_device(), scene, median_split());
+    REQUIRE(!kd_node_is_leaf(median.nodes[0]));
+    CHECK(kd_node_axis(median.nodes[0]) == 0);
+    CHECK(kd_node_split(median.nodes[0]) == 2.0f);
+    CHECK(count_disagreements(median, scene, test::random_rays(scene, 1000, 5)) == 0);
+}
+
 TEST_CASE("opencl builder: empty space is cut off around two far clusters") {
     const Scene scene = two_clusters();
-    const KdTree tree = build_opencl(test::opencl_test_device(), scene);
+    const KdTree tree = build_opencl(test::opencl_test_device(), scene, median_split());
     REQUIRE(check_tree(tree, scene).empty());
     const KdNode root = tree.nodes[0];
     REQUIRE(!kd_node_is_leaf(root));
@@ -194,7 +237,7 @@ TEST_CASE("opencl builder: a chain of empty-space cuts in one level") {
     const Scene scene = cluster_in_corner();
     check_build(scene, "cluster_in_corner");
     BuildReport report;
-    const KdTree tree = build_opencl(test::opencl_test_device(), scene, {}, &report);
+    const KdTree tree = build_opencl(test::opencl_test_device(), scene, median_split(), &report);
     REQUIRE(check_tree(tree, scene).empty());
     CHECK(report.large_node_levels == 2);  // the root; the chain and its median split
     REQUIRE(!kd_node_is_leaf(tree.nodes[0]));
