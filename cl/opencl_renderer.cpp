@@ -5,6 +5,7 @@
 
 #include "cl/cl_error.h"
 #include "cl/program_cache.h"
+#include "core/kd_render.h"
 
 namespace kdray {
 namespace {
@@ -21,10 +22,29 @@ cl::Buffer upload(ClDevice& device, const std::vector<T>& data, const std::strin
 }
 
 /// Rows per launch: small enough that no single launch runs for seconds on a slow device (GPU
-/// drivers kill long kernels behind a display), large enough to keep every compute unit busy.
-std::size_t rows_per_launch(const KdView& view) {
-    const std::size_t pixels_per_launch = std::size_t(1) << 18;
+/// drivers kill long kernels behind a display), large enough to keep every compute unit busy;
+/// with packets, the primary hits of a launch's pixels fill a buffer of 2^18 hits (4 MiB).
+std::size_t rows_per_launch(const KdView& view, bool packets) {
+    const std::size_t rays_per_pixel = packets ? kd_primary_rays_per_pixel(&view) : 1;
+    const std::size_t pixels_per_launch =
+        std::max<std::size_t>(1, (std::size_t(1) << 18) / rays_per_pixel);
     return std::max<std::size_t>(1, pixels_per_launch / std::max<kd_u32>(1, view.width));
+}
+
+/// Pixels of a packet tile (render.cl's KDRAY_PACKET_TILE) and packet tiles per work-group.
+constexpr std::size_t kPacketTile = 4, kPacketGroup = 4;
+
+bool use_packets(const ClDevice& device, const RenderInputs& inputs) {
+    if (inputs.intersect != KDRAY_INTERSECT_WATERTIGHT) return false;
+    switch (inputs.packets) {
+        case RenderInputs::Packets::On:
+            return true;
+        case RenderInputs::Packets::Off:
+            return false;
+        case RenderInputs::Packets::Auto:
+            break;
+    }
+    return device.info().type == "CPU";
 }
 
 /// Pixels of a work-group. Square tiles keep neighbouring rays, and their paths through the tree,
@@ -49,10 +69,15 @@ std::string render_options(const ClDevice& device, kd_u32 effects, kd_u32 inters
     return options;
 }
 
-cl::Kernel render_kernel(const ClDevice& device, kd_u32 effects, kd_u32 intersect) {
+/// The render program's kernel `name`.
+cl::Kernel render_kernel(const ClDevice& device, kd_u32 effects, kd_u32 intersect,
+                         const char* name) {
     return make_kernel(
-        cached_program(device, "render.cl", render_options(device, effects, intersect)),
-        "kd_render_pixels");
+        cached_program(device, "render.cl", render_options(device, effects, intersect)), name);
+}
+
+std::size_t round_up(std::size_t n, std::size_t multiple) {
+    return (n + multiple - 1) / multiple * multiple;
 }
 
 /// The launch of `rows` image rows from `first_row`, in tiles.
@@ -60,25 +85,50 @@ void enqueue_rows(ClDevice& device, cl::Kernel& kernel, std::size_t width, std::
                   std::size_t rows) {
     kernel.setArg(8, kd_u32(first_row));
     kernel.setArg(9, kd_u32(rows));
-    const std::size_t gx = (width + kTileWidth - 1) / kTileWidth * kTileWidth;
-    const std::size_t gy = (rows + kTileHeight - 1) / kTileHeight * kTileHeight;
-    device.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(gx, gy),
-                                        cl::NDRange(kTileWidth, kTileHeight));
+    device.queue().enqueueNDRangeKernel(
+        kernel, cl::NullRange,
+        cl::NDRange(round_up(width, kTileWidth), round_up(rows, kTileHeight)),
+        cl::NDRange(kTileWidth, kTileHeight));
+}
+
+/// The packet launch of the primary rays of `rows` image rows from `first_row`.
+void enqueue_packets(ClDevice& device, cl::Kernel& kernel, const KdView& view,
+                     std::size_t first_row, std::size_t rows) {
+    kernel.setArg(5, kd_u32(first_row));
+    kernel.setArg(6, kd_u32(rows));
+    const std::size_t tiles_x = (view.width + kPacketTile - 1) / kPacketTile;
+    const std::size_t tiles_y = (rows + kPacketTile - 1) / kPacketTile;
+    device.queue().enqueueNDRangeKernel(
+        kernel, cl::NullRange,
+        cl::NDRange(round_up(tiles_x, kPacketGroup), tiles_y, kd_primary_rays_per_pixel(&view)),
+        cl::NDRange(kPacketGroup, 1, 1));
 }
 
 }  // namespace
 
-void prepare_opencl_renderer(ClDevice& device, kd_u32 effects, kd_u32 intersect) {
-    cl::Kernel kernel = render_kernel(device, effects, intersect);
+void prepare_opencl_renderer(ClDevice& device, kd_u32 effects, kd_u32 intersect,
+                             RenderInputs::Packets packets) {
+    RenderInputs inputs;
+    inputs.intersect = intersect;
+    inputs.packets = packets;
+    cl::Kernel kernel = render_kernel(device, effects, intersect, "kd_render_pixels");
     // One tile over an image of width 0: every work-item returns at once, but the device
     // compiles the kernel for the tile size it will run with.
     KdView view{};
     with_cl_context("preparing the render kernel on " + device.info().name, [&] {
         cl::Buffer dummy = device.allocate(sizeof(KdHit), "render kernel warm-up buffer");
-        for (cl_uint arg = 0; arg < 14; ++arg)
+        for (cl_uint arg = 0; arg < 15; ++arg)
             if (arg != 7 && arg != 8 && arg != 9) kernel.setArg(arg, dummy);
         kernel.setArg(7, sizeof(KdView), &view);
+        kernel.setArg(15, kd_u32(0));
         enqueue_rows(device, kernel, 1, 0, 1);
+        if (use_packets(device, inputs)) {
+            cl::Kernel packet =
+                render_kernel(device, effects, intersect, "kd_trace_camera_packets");
+            for (cl_uint arg : {0, 1, 2, 3, 7}) packet.setArg(arg, dummy);
+            packet.setArg(4, sizeof(KdView), &view);
+            enqueue_packets(device, packet, view, 0, 1);
+        }
         device.queue().finish();
     });
 }
@@ -87,7 +137,9 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
                           const RenderInputs& inputs) {
     const KdView& view = inputs.view;
     const std::size_t pixels = std::size_t(view.width) * view.height;
-    cl::Kernel kernel = render_kernel(device, inputs.effects.bits(), inputs.intersect);
+    const bool packets = use_packets(device, inputs);
+    cl::Kernel kernel =
+        render_kernel(device, inputs.effects.bits(), inputs.intersect, "kd_render_pixels");
 
     std::vector<float> bounds = {tree.bounds.lo.x, tree.bounds.lo.y, tree.bounds.lo.z,
                                  tree.bounds.hi.x, tree.bounds.hi.y, tree.bounds.hi.z};
@@ -103,8 +155,25 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
     cl::Buffer normals = device.allocate(pixels * 3 * sizeof(float), "normal buffer");
     cl::Buffer counts = device.allocate(pixels * sizeof(KdRayCounts), "ray counts");
 
-    const std::size_t step = rows_per_launch(view);
+    const std::size_t step = rows_per_launch(view, packets);
+    // The primary hits of one launch's rows (all of its pixels' primary rays), when packets trace
+    // them; in-order queue, so one buffer serves every launch.
+    cl::Buffer traced = device.allocate(
+        packets ? step * view.width * kd_primary_rays_per_pixel(&view) * sizeof(KdHit)
+                : sizeof(KdHit),
+        "primary hit buffer");
+    cl::Kernel packet;
     with_cl_context("rendering a frame on " + device.info().name, [&] {
+        if (packets) {
+            packet = render_kernel(device, inputs.effects.bits(), inputs.intersect,
+                                   "kd_trace_camera_packets");
+            packet.setArg(0, nodes);
+            packet.setArg(1, leaf_indices);
+            packet.setArg(2, triangles);
+            packet.setArg(3, bounds_buffer);
+            packet.setArg(4, sizeof(KdView), &view);
+            packet.setArg(7, traced);
+        }
         kernel.setArg(0, nodes);
         kernel.setArg(1, leaf_indices);
         kernel.setArg(2, triangles);
@@ -117,9 +186,13 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
         kernel.setArg(11, hits);
         kernel.setArg(12, normals);
         kernel.setArg(13, counts);
-        for (std::size_t row = 0; row < view.height; row += step)
-            enqueue_rows(device, kernel, view.width, row,
-                         std::min<std::size_t>(step, view.height - row));
+        kernel.setArg(14, traced);
+        kernel.setArg(15, kd_u32(packets));
+        for (std::size_t row = 0; row < view.height; row += step) {
+            const std::size_t rows = std::min<std::size_t>(step, view.height - row);
+            if (packets) enqueue_packets(device, packet, view, row, rows);
+            enqueue_rows(device, kernel, view.width, row, rows);
+        }
     });
 
     FrameResult frame;

@@ -17,10 +17,12 @@ namespace kdray {
 /// work (PoCL compiles a kernel per work-group size on its first launch) are done before the first
 /// frame is timed. Later calls, and frames with these effects, reuse what it built.
 void prepare_opencl_renderer(ClDevice& device, kd_u32 effects,
-                             kd_u32 intersect = KDRAY_INTERSECT_WATERTIGHT);
+                             kd_u32 intersect = KDRAY_INTERSECT_WATERTIGHT,
+                             RenderInputs::Packets packets = RenderInputs::Packets::Auto);
 
 /// Renders one frame. The render program is built once per effects combination and triangle
-/// test (inputs.intersect) and reused.
+/// test (inputs.intersect) and reused. With packets (inputs.packets), kd_trace_camera_packets
+/// traces each launch's primary rays first and kd_render_pixels shades from their hits.
 FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& scene,
                           const RenderInputs& inputs);
 

@@ -64,9 +64,13 @@ struct RenderRun {
     Camera framed;  // without a camera in the render file: frame the first rendered scene
 };
 
-/// KDRAY_INTERSECT_* for --intersect.
-kd_u32 intersect_test(const RenderCommand& command) {
-    return command.intersect == "moller" ? KDRAY_INTERSECT_MOLLER : KDRAY_INTERSECT_WATERTIGHT;
+/// The tracer's choices the command line makes: --intersect and --packets.
+void set_trace_options(const RenderCommand& command, RenderInputs& inputs) {
+    inputs.intersect =
+        command.intersect == "moller" ? KDRAY_INTERSECT_MOLLER : KDRAY_INTERSECT_WATERTIGHT;
+    inputs.packets = command.packets == "on"    ? RenderInputs::Packets::On
+                     : command.packets == "off" ? RenderInputs::Packets::Off
+                                                : RenderInputs::Packets::Auto;
 }
 
 /// Builds, traces and writes frame i; returns its stats.json record.
@@ -76,11 +80,11 @@ nlohmann::json render_frame(RenderRun& run, std::size_t i, const Scene& scene, d
     Camera camera = run.settings.camera_given ? run.settings.camera_at(int(i)) : run.framed;
     BuiltTree built = run.builder.build(scene);
     RenderInputs render_inputs = prepare_render(scene, run.settings, camera, kd_u32(i));
-    render_inputs.intersect = intersect_test(command);
+    set_trace_options(command, render_inputs);
     // The render program of this frame's effects is built (once per run) outside trace_ms.
     if (command.tracer == "opencl")
         prepare_opencl_renderer(run.session.device(), render_inputs.effects.bits(),
-                                render_inputs.intersect);
+                                render_inputs.intersect, render_inputs.packets);
     auto trace_start = Clock::now();
     FrameResult result = command.tracer == "opencl"
                              ? render_opencl(run.session.device(), built.tree, scene, render_inputs)
@@ -173,7 +177,7 @@ int run_render(const RenderCommand& command) {
                                               : frame_bounds(scene.bounds());
         BuiltTree built = builder.build(scene);
         RenderInputs render_inputs = prepare_render(scene, settings, camera, 0);
-        render_inputs.intersect = intersect_test(command);
+        set_trace_options(command, render_inputs);
         if (command.tracer == "opencl")
             render_opencl(session.device(), built.tree, scene, render_inputs);
         else
@@ -222,6 +226,7 @@ int run_render(const RenderCommand& command) {
         {"image", {{"width", settings.width}, {"height", settings.height}, {"spp", settings.spp}}},
         {"max_depth", settings.max_depth},
         {"intersect", command.intersect},
+        {"packets", command.packets},
         {"frames", frames},
         {"summary", summary_json(frames)}};
     if (!failures.empty()) stats["failed_frames"] = failures;

@@ -38,6 +38,7 @@ struct RenderCommand {
     bool keep_going = false;  // render the remaining frames after a bad one
     bool warm_up = false;     // benchmarks: render the first frame once, untimed, before the run
     std::string intersect = "watertight";  // ray-triangle test: "watertight" or "moller"
+    std::string packets = "auto";  // primary rays as packets: "auto" (CPU devices), "on", "off"
     BuilderOptions builder;
 };
 

@@ -98,6 +98,13 @@ int main(int argc, char** argv) {
                      "edges and vertices of closed meshes)")
         ->check(CLI::IsMember({"watertight", "moller"}))
         ->capture_default_str();
+    render_app
+        ->add_option("--packets", render.packets,
+                     "OpenCL tracer: trace primary rays in packets of 16 (4x4 pixels) on the "
+                     "device's SIMD lanes; auto: on CPU devices (watertight test only; the hits "
+                     "are the same)")
+        ->check(CLI::IsMember({"auto", "on", "off"}))
+        ->capture_default_str();
     render_app->add_option("--frames", render.frames,
                            "render only frames START:END[:STEP] (END included; frame numbers are "
                            "positions in the naturally sorted inputs)");

@@ -213,8 +213,8 @@ KDRAY_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
             const kd_f32 cos_h = kd_dot3(n, h);
             /* Normalised Blinn-Phong: (Ns + 8) / (8 pi) keeps the highlight's energy fixed. */
             if (cos_h > 0.0f)
-                highlight =
-                    (m->shininess + 8.0f) / (8.0f * KDRAY_PI) * kd_pow_positive(cos_h, m->shininess);
+                highlight = (m->shininess + 8.0f) / (8.0f * KDRAY_PI) *
+                            kd_pow_positive(cos_h, m->shininess);
         }
         for (int c = 0; c < 3; ++c)
             out[c] +=
@@ -227,10 +227,11 @@ KDRAY_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
  * CPU device keeps in memory and a GPU in scratch). Its arithmetic is kd_trace_sample's for a
  * tree of one ray (weight 1, nothing pushed), so the two give identical colours. */
 KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdView* view,
-                                             KdRay primary, kd_f32* rgb, KdRayCounts* rays,
-                                             KdHit* first_hit, kd_f32* first_normal) {
+                                             KdRay primary, const KdHit* traced, kd_f32* rgb,
+                                             KdRayCounts* rays, KdHit* first_hit,
+                                             kd_f32* first_normal) {
     rays->primary += 1u;
-    const KdHit hit = kd_scene_closest(scene, primary);
+    const KdHit hit = traced ? *traced : kd_scene_closest(scene, primary);
     kd_f32 n[3] = {0.0f, 0.0f, 0.0f};
     if (hit.prim != KDRAY_NO_HIT)
         kd_facing_normal(scene->triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE,
@@ -251,14 +252,15 @@ KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdV
     for (int c = 0; c < 3; ++c) rgb[c] = 0.0f + (m->emission[c] + surface * direct[c]);
 }
 
-/* Traces one sample's ray tree from the primary ray and returns its colour. The pending stack
- * holds at most one ray per level: each traced ray pushes at most two, one of which is traced
- * next. */
+/* Traces one sample's ray tree from the primary ray and returns its colour. The primary ray's
+ * hit is `traced` when it was traced already (by the packet kernel), else it is traced here. The
+ * pending stack holds at most one ray per level: each traced ray pushes at most two, one of
+ * which is traced next. */
 KDRAY_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* view, KdRay primary,
-                                  kd_f32* rgb, KdRayCounts* rays, KdHit* first_hit,
-                                  kd_f32* first_normal) {
+                                  const KdHit* traced, kd_f32* rgb, KdRayCounts* rays,
+                                  KdHit* first_hit, kd_f32* first_normal) {
     if (!KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFLECTION | KDRAY_EFFECT_REFRACTION)) {
-        kd_trace_direct_sample(scene, view, primary, rgb, rays, first_hit, first_normal);
+        kd_trace_direct_sample(scene, view, primary, traced, rgb, rays, first_hit, first_normal);
         return;
     }
     KdPendingRay stack[KDRAY_MAX_BOUNCES + 1];
@@ -274,7 +276,7 @@ KDRAY_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* view, 
             rays->reflection += 1u;
         else
             rays->refraction += 1u;
-        const KdHit hit = kd_scene_closest(scene, r.ray);
+        const KdHit hit = r.kind == 0u && traced ? *traced : kd_scene_closest(scene, r.ray);
         kd_f32 n[3] = {0.0f, 0.0f, 0.0f};
         KDRAY_GLOBAL const kd_f32* tri = scene->triangles;
         if (hit.prim != KDRAY_NO_HIT) {
@@ -344,18 +346,36 @@ KDRAY_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* view, 
     }
 }
 
-/* One pixel: spp samples (the centre ray when spp is 1, else jittered inside the pixel), their
- * mean colour, and the centre ray's hit for the AOV. */
+/* The primary rays of a pixel: spp samples, jittered inside the pixel when spp > 1 and else the
+ * ray through its centre, and with spp > 1 one more, the centre ray, for the AOV (conventions.md:
+ * AOVs always come from the centre ray). */
+KDRAY_INLINE kd_u32 kd_primary_rays_per_pixel(const KdView* view) {
+    return view->spp > 1u ? view->spp + 1u : 1u;
+}
+
+/* Primary ray `r` (< kd_primary_rays_per_pixel) of pixel (x, y): sample r, or the centre ray for
+ * r == spp. */
+KDRAY_INLINE KdRay kd_primary_ray(const KdView* view, kd_u32 x, kd_u32 y, kd_u32 r) {
+    if (view->spp <= 1u || r == view->spp)
+        return kd_camera_ray(view, (kd_f32)x + 0.5f, (kd_f32)y + 0.5f);
+    const kd_u32 h = kd_hash((y * view->width + x) * 0x9E3779B9u ^ kd_hash(r + view->seed));
+    return kd_camera_ray(view, (kd_f32)x + kd_unit_float(h), (kd_f32)y + kd_unit_float(kd_hash(h)));
+}
+
+/* One pixel: spp samples, their mean colour, and the centre ray's hit for the AOV. `traced`,
+ * when not 0, holds the hits of the pixel's primary rays, already traced: the hit of ray r at
+ * traced[r * traced_stride]. */
 KDRAY_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView* view, kd_u32 x,
-                                     kd_u32 y) {
+                                     kd_u32 y, KDRAY_GLOBAL const KdHit* traced,
+                                     kd_u32 traced_stride) {
     KdPixel out;
     kd_set3(out.rgb, 0.0f, 0.0f, 0.0f);
     out.rays.primary = out.rays.shadow = out.rays.reflection = out.rays.refraction = 0u;
-    const kd_f32 cx = (kd_f32)x + 0.5f, cy = (kd_f32)y + 0.5f;
     if (view->spp > 1u) {
-        /* The AOV always comes from the centre ray (conventions.md), an extra primary ray. */
-        const KdRay centre = kd_camera_ray(view, cx, cy);
-        out.centre_hit = kd_scene_closest(scene, centre);
+        /* The AOV's centre ray: an extra primary ray. */
+        const KdRay centre = kd_primary_ray(view, x, y, view->spp);
+        out.centre_hit =
+            traced ? traced[view->spp * traced_stride] : kd_scene_closest(scene, centre);
         out.rays.primary += 1u;
         kd_set3(out.normal, 0.0f, 0.0f, 0.0f);
         if (out.centre_hit.prim != KDRAY_NO_HIT) {
@@ -365,15 +385,11 @@ KDRAY_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView* vie
         }
     }
     for (kd_u32 s = 0; s < view->spp; ++s) {
-        kd_f32 px = cx, py = cy;
-        if (view->spp > 1u) {
-            const kd_u32 h = kd_hash((y * view->width + x) * 0x9E3779B9u ^ kd_hash(s + view->seed));
-            px = (kd_f32)x + kd_unit_float(h);
-            py = (kd_f32)y + kd_unit_float(kd_hash(h));
-        }
         kd_f32 rgb[3];
-        kd_trace_sample(scene, view, kd_camera_ray(view, px, py), rgb, &out.rays,
-                        view->spp == 1u ? &out.centre_hit : 0, out.normal);
+        KdHit hit;
+        if (traced) hit = traced[s * traced_stride];
+        kd_trace_sample(scene, view, kd_primary_ray(view, x, y, s), traced ? &hit : 0, rgb,
+                        &out.rays, view->spp == 1u ? &out.centre_hit : 0, out.normal);
         for (int c = 0; c < 3; ++c) out.rgb[c] += rgb[c];
     }
     for (int c = 0; c < 3; ++c) out.rgb[c] /= (kd_f32)view->spp;

@@ -40,6 +40,10 @@ struct RenderInputs {
     Effects effects;
     /// KDRAY_INTERSECT_*: the ray-triangle test of every trace (`kdray render --intersect`).
     kd_u32 intersect = KDRAY_INTERSECT_WATERTIGHT;
+    /// Whether the OpenCL tracer traces primary rays as packets of 16 (`kdray render --packets`):
+    /// Auto does on CPU devices, whose SIMD lanes a single ray leaves idle. Packets exist for the
+    /// watertight test only; the hits are the same either way.
+    enum class Packets { Auto, On, Off } packets = Packets::Auto;
 };
 RenderInputs prepare_render(const Scene& scene, const RenderSettings& settings,
                             const Camera& camera, kd_u32 seed);

@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -176,4 +177,82 @@ TEST_CASE("opencl render: prepare_opencl_renderer builds the program that frames
     const FrameResult host = render_reference(tree, scene, inputs, 1);
     for (std::size_t i = 0; i < host.hits.hits.size(); ++i)
         CHECK(test::hits_agree(f.hits.hits[i], host.hits.hits[i]));
+}
+
+namespace {
+
+/// Whether two hits are the same bit for bit: the packet walk must be the scalar walk exactly.
+bool same_bits(const KdHit& a, const KdHit& b) {
+    return std::memcmp(&a, &b, sizeof(KdHit)) == 0;
+}
+
+/// The device's centre hits with packets on and off against the reference tracer's, bit for bit,
+/// and its image against the reference's.
+void check_packets(const Scene& scene, const KdTree& tree, const RenderInputs& base) {
+    const FrameResult host = render_reference(tree, scene, base, 1);
+    for (RenderInputs::Packets packets : {RenderInputs::Packets::On, RenderInputs::Packets::Off}) {
+        CAPTURE(packets == RenderInputs::Packets::On);
+        RenderInputs inputs = base;
+        inputs.packets = packets;
+        const FrameResult device = render_opencl(test::opencl_test_device(), tree, scene, inputs);
+        REQUIRE(device.hits.hits.size() == host.hits.hits.size());
+        int differ = 0;
+        for (std::size_t i = 0; i < host.hits.hits.size(); ++i)
+            differ += !same_bits(device.hits.hits[i], host.hits.hits[i]);
+        CHECK(differ == 0);
+        CHECK(device.rays.primary == host.rays.primary);
+        CHECK(rgb_rmse(device.image, host.image) < 1e-4);
+    }
+}
+
+}  // namespace
+
+TEST_CASE("opencl render: packets of primary rays give the reference's hits bit for bit") {
+    // 37 x 29 pixels: tiles of 4 x 4 that the image's right and bottom edges cut, whose lanes
+    // outside the image must neither be traced nor written.
+    for (const test::NamedScene& s : test::hard_scenes()) {
+        CAPTURE(s.name);
+        const KdTree tree = build_reference(s.scene);
+        const RenderInputs inputs =
+            prepare_render(s.scene, small_settings(37, 29), skew_camera(s.scene), 0);
+        check_packets(s.scene, tree, inputs);
+    }
+    SUBCASE("spp 3: three jittered samples and the centre ray per pixel, one packet each") {
+        const Scene scene = test::random_triangles(2000, 41);
+        const KdTree tree = build_reference(scene);
+        RenderSettings settings = small_settings(21, 14);
+        settings.spp = 3;
+        check_packets(scene, tree, prepare_render(scene, settings, skew_camera(scene), 7));
+    }
+}
+
+TEST_CASE("opencl render: packets whose lanes walk a node's children in opposite orders") {
+    // The camera sits inside the scene, exactly on the root's split plane, and looks along it:
+    // the image's left half leaves the plane below, its right half above, and the centre column
+    // (odd width, direction exactly 0 on the axis) lies in it. Every ray crosses the plane at
+    // t = 0, so each visits both children, in its own order, and tiles across the middle hold
+    // all three kinds: the packet must visit below, above and below again for them. The order
+    // shows in the hits only where triangles tie, so the scene is a lattice of cubes whose faces
+    // and edges are shared and lie on split planes.
+    const Scene scene = test::cube_lattice(4);
+    const KdTree tree = build_reference(scene);
+    REQUIRE(!kd_node_is_leaf(tree.nodes[0]));
+    const int axis = int(kd_node_axis(tree.nodes[0]));
+    const float split = kd_node_split(tree.nodes[0]);
+    const int ahead = (axis + 1) % 3, up = (axis + 2) % 3;
+    const Aabb b = scene.bounds();
+    Camera camera;
+    camera.position = (b.lo + b.hi) * 0.5f;
+    camera.position[axis] = split;
+    camera.position[ahead] = b.lo[ahead] + 0.3f * (b.hi[ahead] - b.lo[ahead]);
+    camera.look_at = camera.position;
+    camera.look_at[ahead] += 1.0f;
+    camera.up = Vec3{0, 0, 0};
+    camera.up[up] = 1.0f;
+    camera.fov_y = 70.0f;
+    const RenderInputs inputs = prepare_render(scene, small_settings(33, 20), camera, 0);
+    REQUIRE(inputs.view.right[axis] != 0.0f);
+    REQUIRE(inputs.view.forward[axis] == 0.0f);
+    REQUIRE(inputs.view.up[axis] == 0.0f);
+    check_packets(scene, tree, inputs);
 }

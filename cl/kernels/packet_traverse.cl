@@ -1,0 +1,239 @@
+/* packet_traverse.cl — the kd-tree walk of core/kd_traverse.h for a packet of 16 rays at once, in
+ * the lanes of OpenCL vectors (float16), after Wald, Slusallek, Benthin & Wagner, "Interactive
+ * rendering with coherent ray tracing" (Eurographics 2001): one walk through the tree shared by
+ * the packet, each node's split computed for all lanes in one vector operation, each leaf's
+ * triangles tested against all lanes together. It is for CPU devices, whose work-items run one
+ * after another and whose SIMD units a single ray's walk leaves idle (PoCL does not vectorise a
+ * walk across work-items: its control flow diverges); a GPU already runs one ray per lane.
+ * Included by render.cl; it holds no kernel of its own.
+ *
+ * Every lane is the scalar walk exactly: it visits the same nodes with the same [tmin, tmax] in
+ * the same order and tests the same triangles in the same order with the same arithmetic, so its
+ * hit equals kd_trace's bit for bit, ties between triangles included. The packet's walk is the
+ * union of its lanes' walks: a lane takes part in a node only when its own walk visits it (its
+ * mask), and when lanes want a node's children in opposite orders the node's children are
+ * visited three times: below (for the lanes that go below first), above (for all), below (for
+ * the lanes that go above first). Coherent rays (a camera tile) share nearly every node.
+ *
+ * Only the watertight test has a packet form; Moller-Trumbore renders trace one ray at a time. */
+#ifndef KDRAY_PACKET_TRAVERSE_CL
+#define KDRAY_PACKET_TRAVERSE_CL
+
+#include "core/kd_traverse.h"
+
+#define KDRAY_PACKET_SIZE 16
+
+/* Per-lane constants of the walk and of the watertight test (KdRayPrecomp, one lane per ray). */
+typedef struct KdPacket {
+    float16 org[3], dir[3], inv_dir[3];
+    int16 kx, ky, kz;
+    float16 sx, sy, sz;
+    float16 ox, oy, oz; /* org[kx], org[ky], org[kz] */
+    float16 tmin;       /* the rays' own tmin: hits nearer than it do not count */
+} KdPacket;
+
+typedef struct KdPacketHit {
+    float16 t, u, v;
+    uint16 prim;
+} KdPacketHit;
+
+/* Component `axis` (uniform over the packet) of a vector triple. */
+inline float16 kd_packet_axis(const float16* v, uint axis) {
+    return axis == 0 ? v[0] : (axis == 1 ? v[1] : v[2]);
+}
+
+/* Per lane, component k[lane] of the triangle corner c (three floats). */
+inline float16 kd_packet_pick(int16 k, __global const float* c) {
+    return select(select((float16)(c[2]), (float16)(c[1]), k == 1), (float16)(c[0]), k == 0);
+}
+
+/* kd_intersect_triangle for the lanes in `active`, operation for operation: a lane whose test
+ * accepts the triangle takes it as its best hit. */
+KDRAY_HOT_INLINE void kd_packet_intersect(const KdPacket* p, __global const float* tri, uint id,
+                                          int16 active, KdPacketHit* best) {
+    const float16 a_x = kd_packet_pick(p->kx, tri) - p->ox,
+                  a_y = kd_packet_pick(p->ky, tri) - p->oy,
+                  a_z = kd_packet_pick(p->kz, tri) - p->oz;
+    const float16 b_x = kd_packet_pick(p->kx, tri + 3) - p->ox,
+                  b_y = kd_packet_pick(p->ky, tri + 3) - p->oy,
+                  b_z = kd_packet_pick(p->kz, tri + 3) - p->oz;
+    const float16 c_x = kd_packet_pick(p->kx, tri + 6) - p->ox,
+                  c_y = kd_packet_pick(p->ky, tri + 6) - p->oy,
+                  c_z = kd_packet_pick(p->kz, tri + 6) - p->oz;
+    const float16 ax = a_x - p->sx * a_z, ay = a_y - p->sy * a_z;
+    const float16 bx = b_x - p->sx * b_z, by = b_y - p->sy * b_z;
+    const float16 cx = c_x - p->sx * c_z, cy = c_y - p->sy * c_z;
+    float16 u = cx * by - cy * bx;
+    float16 v = ax * cy - ay * cx;
+    float16 w = bx * ay - by * ax;
+#ifdef KDRAY_HAS_DOUBLE
+    const int16 zero = active & ((u == 0.0f) | (v == 0.0f) | (w == 0.0f));
+    if (any(zero)) {
+        const double16 dax = convert_double16(ax), day = convert_double16(ay);
+        const double16 dbx = convert_double16(bx), dby = convert_double16(by);
+        const double16 dcx = convert_double16(cx), dcy = convert_double16(cy);
+        u = select(u, convert_float16(dcx * dby - dcy * dbx), zero);
+        v = select(v, convert_float16(dax * dcy - day * dcx), zero);
+        w = select(w, convert_float16(dbx * day - dby * dax), zero);
+    }
+#endif
+    int16 ok =
+        active & ~(((u < 0.0f) | (v < 0.0f) | (w < 0.0f)) & ((u > 0.0f) | (v > 0.0f) | (w > 0.0f)));
+    const float16 det = u + v + w;
+    ok &= det != 0.0f;
+    if (!any(ok)) return;
+    const float16 az = p->sz * a_z, bz = p->sz * b_z, cz = p->sz * c_z;
+    const float16 t_scaled = u * az + v * bz + w * cz;
+    const float16 sign = select((float16)(1.0f), (float16)(-1.0f), det < 0.0f);
+    const float16 abs_det = det * sign, t_abs = t_scaled * sign;
+    ok &= ~((t_abs < p->tmin * abs_det) | (t_abs >= best->t * abs_det));
+    if (!any(ok)) return;
+    const float16 inv_det = 1.0f / det;
+    const float16 t = t_scaled * inv_det;
+    ok &= ~((t < p->tmin) | (t >= best->t));
+    best->t = select(best->t, t, ok);
+    best->prim = select(best->prim, (uint16)(id), as_uint16(ok));
+    best->u = select(best->u, v * inv_det, ok);
+    best->v = select(best->v, w * inv_det, ok);
+}
+
+/* A node some lanes still have to visit, with their [tmin, tmax]. */
+typedef struct KdPacketEntry {
+    float16 tmin, tmax;
+    int16 lanes;
+    uint node;
+} KdPacketEntry;
+
+/* The packet of rays[0..15]: the scalar setup of each lane (kd_ray_precompute and the clip to the
+ * root box, the shared code) gathered into the lanes. *tmin, *tmax: each lane's interval inside
+ * the root box; *active: the lanes with valid[lane] != 0 whose ray meets the box; best: no hit
+ * before each ray's tmax. */
+KDRAY_HOT_INLINE void kd_packet_setup(const float* bounds, const KdRay* rays, const int* valid,
+                                      KdPacket* p, float16* tmin, float16* tmax, int16* active,
+                                      KdPacketHit* best) {
+    float f[19][KDRAY_PACKET_SIZE];
+    int k[4][KDRAY_PACKET_SIZE];
+    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
+        const KdRayPrecomp r = kd_ray_precompute(rays[i]);
+        float t0 = rays[i].tmin, t1 = rays[i].tmax;
+        k[3][i] = valid[i] && kd_clip_to_box(&r, bounds, bounds + 3, &t0, &t1) ? -1 : 0;
+        for (int a = 0; a < 3; ++a) {
+            f[a][i] = r.org[a];
+            f[3 + a][i] = r.dir[a];
+            f[6 + a][i] = r.inv_dir[a];
+        }
+        f[9][i] = r.sx, f[10][i] = r.sy, f[11][i] = r.sz;
+        f[12][i] = r.ox, f[13][i] = r.oy, f[14][i] = r.oz;
+        f[15][i] = rays[i].tmin, f[16][i] = t0, f[17][i] = t1, f[18][i] = rays[i].tmax;
+        k[0][i] = r.kx, k[1][i] = r.ky, k[2][i] = r.kz;
+    }
+    for (int a = 0; a < 3; ++a) {
+        p->org[a] = vload16(0, f[a]);
+        p->dir[a] = vload16(0, f[3 + a]);
+        p->inv_dir[a] = vload16(0, f[6 + a]);
+    }
+    p->sx = vload16(0, f[9]), p->sy = vload16(0, f[10]), p->sz = vload16(0, f[11]);
+    p->ox = vload16(0, f[12]), p->oy = vload16(0, f[13]), p->oz = vload16(0, f[14]);
+    p->tmin = vload16(0, f[15]);
+    p->kx = vload16(0, k[0]), p->ky = vload16(0, k[1]), p->kz = vload16(0, k[2]);
+    *tmin = vload16(0, f[16]);
+    *tmax = vload16(0, f[17]);
+    *active = vload16(0, k[3]);
+    best->t = vload16(0, f[18]);
+    best->u = best->v = (float16)(0.0f);
+    best->prim = (uint16)(KDRAY_NO_HIT);
+}
+
+/* Nearest hits of the 16 rays (lanes with valid[lane] == 0 are not traced and miss), each as
+ * kd_trace_closest gives it for the ray alone. */
+KDRAY_HOT_INLINE void kd_trace_packet(__global const KdNode* nodes,
+                                      __global const kd_u32* leaf_indices,
+                                      __global const float* triangles, const float* bounds,
+                                      const KdRay* rays, const int* valid, KdHit* hits) {
+    KdPacket p;
+    float16 tmin, tmax;
+    int16 active;
+    KdPacketHit best;
+    kd_packet_setup(bounds, rays, valid, &p, &tmin, &tmax, &active, &best);
+    /* Each inner node pushes at most two entries (kd_trace: one), KDRAY_MAX_DEPTH levels deep. */
+    KdPacketEntry stack[2 * KDRAY_MAX_DEPTH];
+    int top = 0;
+    uint node_index = 0;
+    for (;;) {
+        /* A lane stops where its best hit lies before the node (kd_trace's test). */
+        active &= ~(best.t < tmin);
+        if (any(active)) {
+            const KdNode node = nodes[node_index];
+            if (!kd_node_is_leaf(node)) {
+                const uint axis = kd_node_axis(node);
+                const float split = kd_node_split(node);
+                const float16 o = kd_packet_axis(p.org, axis), d = kd_packet_axis(p.dir, axis);
+                const float16 t_plane = (split - o) * kd_packet_axis(p.inv_dir, axis);
+                /* Per lane, kd_trace's cases: a ray lying in the plane visits both children,
+                 * below first, over its whole interval; any other visits the child on its
+                 * origin's side (first) and the other (second) as the plane's distance says. */
+                const int16 in_plane = (d == 0.0f) & (o == split);
+                const int16 below_first = in_plane | (o < split) | ((o == split) & (d > 0.0f));
+                const int16 only_first = (t_plane > tmax) | (t_plane < 0.0f);
+                const int16 only_second = ~only_first & (t_plane < tmin);
+                const int16 both = ~only_first & ~only_second;
+                const int16 first = active & (in_plane | only_first | both);
+                const int16 second = active & (in_plane | only_second | both);
+                const float16 first_tmax = select(select(tmax, t_plane, both), tmax, in_plane);
+                const float16 second_tmin = select(select(tmin, t_plane, both), tmin, in_plane);
+                KdPacketEntry below, above;
+                below.node = node_index + 1;
+                below.lanes = select(second, first, below_first);
+                below.tmin = select(second_tmin, tmin, below_first);
+                below.tmax = select(tmax, first_tmax, below_first);
+                above.node = kd_node_above_child(node);
+                above.lanes = select(first, second, below_first);
+                above.tmin = select(tmin, second_tmin, below_first);
+                above.tmax = select(first_tmax, tmax, below_first);
+                /* Lanes that visit both children above first see below again after above. */
+                const int16 below_later = below.lanes & above.lanes & ~below_first;
+                if (any(below_later)) {
+                    stack[top] = below;
+                    stack[top].lanes = below_later;
+                    ++top;
+                }
+                if (any(above.lanes)) stack[top++] = above;
+                below.lanes &= ~below_later;
+                if (any(below.lanes)) {
+                    node_index = below.node;
+                    active = below.lanes;
+                    tmin = below.tmin;
+                    tmax = below.tmax;
+                    continue;
+                }
+            } else {
+                const uint count = kd_leaf_count(node), offset = kd_leaf_offset(node);
+                for (uint i = 0; i < count; ++i) {
+                    const uint id = leaf_indices[offset + i];
+                    kd_packet_intersect(&p, triangles + (size_t)id * KDRAY_FLOATS_PER_TRIANGLE, id,
+                                        active, &best);
+                }
+            }
+        }
+        if (top == 0) break;
+        --top;
+        node_index = stack[top].node;
+        active = stack[top].lanes;
+        tmin = stack[top].tmin;
+        tmax = stack[top].tmax;
+    }
+    float t[KDRAY_PACKET_SIZE], u[KDRAY_PACKET_SIZE], v[KDRAY_PACKET_SIZE];
+    uint prim[KDRAY_PACKET_SIZE];
+    vstore16(best.t, 0, t);
+    vstore16(best.u, 0, u);
+    vstore16(best.v, 0, v);
+    vstore16(best.prim, 0, prim);
+    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
+        hits[i].prim = prim[i];
+        hits[i].t = prim[i] == KDRAY_NO_HIT ? KDRAY_INF : t[i];
+        hits[i].u = u[i];
+        hits[i].v = v[i];
+    }
+}
+
+#endif /* KDRAY_PACKET_TRAVERSE_CL */
