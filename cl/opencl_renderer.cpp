@@ -1,6 +1,7 @@
 #include "cl/opencl_renderer.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <string>
 
 #include "cl/cl_error.h"
@@ -152,8 +153,13 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
     cl::Buffer bounds_buffer = upload(device, bounds, "scene bounds");
     cl::Buffer rgb = device.allocate(pixels * 3 * sizeof(float), "image");
     cl::Buffer hits = device.allocate(pixels * sizeof(KdHit), "hit buffer");
-    cl::Buffer normals = device.allocate(pixels * 3 * sizeof(float), "normal buffer");
-    cl::Buffer counts = device.allocate(pixels * sizeof(KdRayCounts), "ray counts");
+    // Normals only for the AOV; per-pixel ray counts only from a kernel with effects (without
+    // any, every pixel casts its primary rays and nothing else).
+    const bool count_rays = inputs.effects.bits() != 0;
+    cl::Buffer normals =
+        device.allocate(inputs.normals ? pixels * 3 * sizeof(float) : 1, "normal buffer");
+    cl::Buffer counts =
+        device.allocate(count_rays ? pixels * sizeof(KdRayCounts) : 1, "ray counts");
 
     const std::size_t step = rows_per_launch(view, packets);
     // The primary hits of one launch's rows (all of its pixels' primary rays), when packets trace
@@ -187,7 +193,8 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
         kernel.setArg(12, normals);
         kernel.setArg(13, counts);
         kernel.setArg(14, traced);
-        kernel.setArg(15, kd_u32(packets));
+        kernel.setArg(15, kd_u32((packets ? KDRAY_RENDER_TRACED_PRIMARY : 0u) |
+                                 (inputs.normals ? KDRAY_RENDER_NORMALS : 0u)));
         for (std::size_t row = 0; row < view.height; row += step) {
             const std::size_t rows = std::min<std::size_t>(step, view.height - row);
             if (packets) enqueue_packets(device, packet, view, row, rows);
@@ -200,21 +207,30 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
     frame.image.height = frame.hits.height = int(view.height);
     frame.image.rgb.resize(pixels * 3);
     frame.hits.hits.resize(pixels);
-    std::vector<float> normal_floats(pixels * 3);
-    std::vector<KdRayCounts> pixel_counts(pixels);
+    std::vector<float> normal_floats(inputs.normals ? pixels * 3 : 0);
+    std::vector<KdRayCounts> pixel_counts(count_rays ? pixels : 0);
     with_cl_context("reading back a frame", [&] {
         cl::CommandQueue& q = device.queue();
         q.enqueueReadBuffer(rgb, CL_FALSE, 0, pixels * 3 * sizeof(float), frame.image.rgb.data());
         q.enqueueReadBuffer(hits, CL_FALSE, 0, pixels * sizeof(KdHit), frame.hits.hits.data());
-        q.enqueueReadBuffer(normals, CL_FALSE, 0, pixels * 3 * sizeof(float), normal_floats.data());
-        q.enqueueReadBuffer(counts, CL_TRUE, 0, pixels * sizeof(KdRayCounts), pixel_counts.data());
+        if (inputs.normals)
+            q.enqueueReadBuffer(normals, CL_FALSE, 0, pixels * 3 * sizeof(float),
+                                normal_floats.data());
+        if (count_rays)
+            q.enqueueReadBuffer(counts, CL_FALSE, 0, pixels * sizeof(KdRayCounts),
+                                pixel_counts.data());
+        q.finish();
     });
-    frame.hits.normals.resize(pixels);
-    for (std::size_t i = 0; i < pixels; ++i) {
-        frame.hits.normals[i] = {normal_floats[3 * i], normal_floats[3 * i + 1],
-                                 normal_floats[3 * i + 2]};
-        frame.rays.add(pixel_counts[i]);
+    if (inputs.normals) {
+        frame.hits.normals.resize(pixels);
+        for (std::size_t i = 0; i < pixels; ++i)
+            frame.hits.normals[i] = {normal_floats[3 * i], normal_floats[3 * i + 1],
+                                     normal_floats[3 * i + 2]};
     }
+    if (count_rays)
+        for (const KdRayCounts& c : pixel_counts) frame.rays.add(c);
+    else
+        frame.rays.primary = std::uint64_t(pixels) * kd_primary_rays_per_pixel(&view);
     return frame;
 }
 

@@ -64,8 +64,9 @@ struct RenderRun {
     Camera framed;  // without a camera in the render file: frame the first rendered scene
 };
 
-/// The tracer's choices the command line makes: --intersect and --packets.
+/// The tracer's choices the command line makes: --intersect, --packets, and normals for --aov.
 void set_trace_options(const RenderCommand& command, RenderInputs& inputs) {
+    inputs.normals = command.aov;
     inputs.intersect =
         command.intersect == "moller" ? KDRAY_INTERSECT_MOLLER : KDRAY_INTERSECT_WATERTIGHT;
     inputs.packets = command.packets == "on"    ? RenderInputs::Packets::On

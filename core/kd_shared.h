@@ -129,6 +129,13 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_EFFECT_REFLECTION 2u
 #define KDRAY_EFFECT_REFRACTION 4u
 
+/* What kd_render_pixels reads and writes besides the image and the centre hits (its `outputs`
+ * argument): the primary rays' hits come traced already (by kd_trace_camera_packets), and the
+ * centre hits' normals are wanted. Per-pixel ray counts are written exactly when the kernel was
+ * built with some effect: without any, a pixel casts its primary rays and nothing else. */
+#define KDRAY_RENDER_TRACED_PRIMARY 1u
+#define KDRAY_RENDER_NORMALS 2u
+
 /* KdMaterial flags. */
 #define KDRAY_MATERIAL_MIRROR 1u     /* ideal mirror reflection weighted by specular (illum 3, 5) */
 #define KDRAY_MATERIAL_DIELECTRIC 2u /* Fresnel reflection + refraction, see transmit_fraction */

@@ -128,7 +128,7 @@ FrameResult render_reference(const KdTree& tree, const Scene& scene, const Rende
     frame.hits.height = frame.image.height = int(view.height);
     const std::size_t pixels = std::size_t(view.width) * std::size_t(view.height);
     frame.hits.hits.resize(pixels);
-    frame.hits.normals.resize(pixels);
+    if (inputs.normals) frame.hits.normals.resize(pixels);
     frame.image.rgb.resize(3 * pixels);
     std::vector<KdRayCounts> counts(pixels);
 
@@ -145,7 +145,7 @@ FrameResult render_reference(const KdTree& tree, const Scene& scene, const Rende
                 }
                 const KdPixel p = kd_render_pixel(&scene_view, &view, x, kd_u32(y), nullptr, 0);
                 frame.hits.hits[i] = p.centre_hit;
-                frame.hits.normals[i] = {p.normal[0], p.normal[1], p.normal[2]};
+                if (inputs.normals) frame.hits.normals[i] = {p.normal[0], p.normal[1], p.normal[2]};
                 for (int c = 0; c < 3; ++c) frame.image.rgb[3 * i + c] = p.rgb[c];
                 counts[i] = p.rays;
             }

@@ -44,6 +44,8 @@ struct RenderInputs {
     /// Auto does on CPU devices, whose SIMD lanes a single ray leaves idle. Packets exist for the
     /// watertight test only; the hits are the same either way.
     enum class Packets { Auto, On, Off } packets = Packets::Auto;
+    /// Whether the frame's hit buffer carries the centre hits' normals (the AOV's N channels).
+    bool normals = true;
 };
 RenderInputs prepare_render(const Scene& scene, const RenderSettings& settings,
                             const Camera& camera, kd_u32 seed);

@@ -31,6 +31,45 @@ inline KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd
     return scene;
 }
 
+/* kd_hash and kd_unit_float of core/kd_render.h, per lane. */
+inline uint16 kd_hash16(uint16 x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+inline float16 kd_unit_float16(uint16 h) {
+    return convert_float16(h >> 8) * (1.0f / 16777216.0f);
+}
+
+/* Primary ray r of pixels (x, y), one per lane: kd_primary_ray and kd_camera_ray of core/
+ * kd_render.h operation for operation, so that each lane's ray is the scalar one bit for bit. */
+inline KdPacketRays kd_primary_packet(const KdView* view, uint16 x, uint16 y, kd_u32 r,
+                                      int16 valid) {
+    float16 px = convert_float16(x) + 0.5f, py = convert_float16(y) + 0.5f;
+    if (view->spp > 1u && r != view->spp) {
+        const uint16 h = kd_hash16((y * view->width + x) * 0x9E3779B9u ^ kd_hash(r + view->seed));
+        px = convert_float16(x) + kd_unit_float16(h);
+        py = convert_float16(y) + kd_unit_float16(kd_hash16(h));
+    }
+    const float16 sx = (2.0f * px / (kd_f32)view->width - 1.0f) * view->tan_half_fov * view->aspect;
+    const float16 sy = (1.0f - 2.0f * py / (kd_f32)view->height) * view->tan_half_fov;
+    KdPacketRays rays;
+    for (int a = 0; a < 3; ++a) {
+        rays.org[a] = (float16)(view->origin[a]);
+        rays.dir[a] = view->forward[a] + (view->right[a] * sx + view->up[a] * sy);
+    }
+    const float16 inv = 1.0f / sqrt(rays.dir[0] * rays.dir[0] + rays.dir[1] * rays.dir[1] +
+                                    rays.dir[2] * rays.dir[2]);
+    for (int a = 0; a < 3; ++a) rays.dir[a] = rays.dir[a] * inv;
+    rays.tmin = (float16)(0.0f);
+    rays.tmax = (float16)(KDRAY_INF);
+    rays.valid = valid;
+    return rays;
+}
+
 /* Work-item (tile x, tile y, primary ray r) traces ray r (kd_primary_ray) of the tile's pixels,
  * rows first_row.. first_row + rows of the image, into hits[r * rows * width + pixel], pixel
  * counted from first_row. */
@@ -46,25 +85,24 @@ __kernel void kd_trace_camera_packets(__global const KdNode* nodes,
     const KdView v = view;
     float box[6];
     for (int i = 0; i < 6; ++i) box[i] = bounds[i];
-    KdRay rays[KDRAY_PACKET_SIZE];
-    int valid[KDRAY_PACKET_SIZE];
-    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
-        const kd_u32 x = x0 + (kd_u32)(i % KDRAY_PACKET_TILE);
-        const kd_u32 row = row0 + (kd_u32)(i / KDRAY_PACKET_TILE);
-        valid[i] = x < v.width && row < rows;
-        rays[i] = kd_primary_ray(&v, valid[i] ? x : x0, first_row + (valid[i] ? row : row0), r);
-    }
+    /* Lane i: pixel (x0 + i % 4, row0 + i / 4) of the tile. */
+    const uint16 lane = (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    const uint16 x = x0 + lane % KDRAY_PACKET_TILE, row = row0 + lane / KDRAY_PACKET_TILE;
+    const int16 valid = (x < v.width) & (row < rows);
+    const KdPacketRays rays = kd_primary_packet(&v, x, first_row + row, r, valid);
     KdHit out[KDRAY_PACKET_SIZE];
-    kd_trace_packet(nodes, leaf_indices, triangles, box, rays, valid, out);
+    kd_trace_packet(nodes, leaf_indices, triangles, box, &rays, out);
     __global KdHit* plane = hits + (size_t)r * rows * v.width;
-    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i)
-        if (valid[i])
-            plane[(size_t)(row0 + i / KDRAY_PACKET_TILE) * v.width + x0 + i % KDRAY_PACKET_TILE] =
-                out[i];
+    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
+        const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE);
+        const kd_u32 ri = row0 + (kd_u32)(i / KDRAY_PACKET_TILE);
+        if (xi < v.width && ri < rows) plane[(size_t)ri * v.width + xi] = out[i];
+    }
 }
 
-/* One pixel per work-item. use_traced: the primary rays' hits are in traced (as
- * kd_trace_camera_packets writes them), else every ray is traced here. */
+/* One pixel per work-item; outputs: KDRAY_RENDER_* bits. With KDRAY_RENDER_TRACED_PRIMARY the
+ * primary rays' hits are in traced (as kd_trace_camera_packets writes them), else every ray is
+ * traced here. */
 __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
                                __global const float* triangles, __global const kd_u32* material_ids,
                                __global const KdMaterial* materials, __global const KdLight* lights,
@@ -72,7 +110,7 @@ __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u
                                const kd_u32 first_row, const kd_u32 rows, __global float* rgb,
                                __global KdHit* hits, __global float* normals,
                                __global KdRayCounts* ray_counts, __global const KdHit* traced,
-                               const kd_u32 use_traced) {
+                               const kd_u32 outputs) {
     const kd_u32 x = (kd_u32)get_global_id(0);
     const kd_u32 row = (kd_u32)get_global_id(1);
     if (x >= view.width || row >= rows) return;
@@ -81,13 +119,15 @@ __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u
         kd_scene_view(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds);
     const KdView v = view;
     const size_t in_launch = (size_t)row * view.width + x;
-    const KdPixel pixel =
-        kd_render_pixel(&scene, &v, x, y, use_traced ? traced + in_launch : 0, rows * view.width);
+    const KdPixel pixel = kd_render_pixel(
+        &scene, &v, x, y, (outputs & KDRAY_RENDER_TRACED_PRIMARY) ? traced + in_launch : 0,
+        rows * view.width);
     const size_t i = (size_t)y * view.width + x;
-    for (int c = 0; c < 3; ++c) {
-        rgb[3 * i + c] = pixel.rgb[c];
-        normals[3 * i + c] = pixel.normal[c];
-    }
+    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = pixel.rgb[c];
+    if (outputs & KDRAY_RENDER_NORMALS)
+        for (int c = 0; c < 3; ++c) normals[3 * i + c] = pixel.normal[c];
     hits[i] = pixel.centre_hit;
+#if KDRAY_COMPILED_EFFECTS != 0
     ray_counts[i] = pixel.rays;
+#endif
 }
