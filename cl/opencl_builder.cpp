@@ -76,10 +76,10 @@ Kernels::Kernels(const ClDevice& device, int large_split_bins) {
     compute_aabbs = make_kernel(large, "kd_compute_aabbs");
     if (large_split_bins > 0) bin_large = make_kernel(large, "kd_bin_large_chunks");
     split_large = make_kernel(large, "kd_split_large_nodes");
-    classify = make_kernel(large, "kd_classify_references");
+    classify = make_kernel(large, "kd_classify_chunks");
     count_large = make_kernel(large, "kd_count_large_children");
     emit_large = make_kernel(large, "kd_emit_large_children");
-    distribute = make_kernel(large, "kd_distribute_references");
+    distribute = make_kernel(large, "kd_distribute_chunks");
     split_masks = make_kernel(small, "kd_compute_split_masks");
     build_subtrees = make_kernel(small, "kd_build_small_subtrees");
     size_subtrees = make_kernel(output, "kd_size_subtrees");
@@ -205,21 +205,24 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
                        split_axis.buffer(), split_pos.buffer(), planar.buffer(), cut_count.buffer(),
                        cut_code.buffer(), cut_pos.buffer());
 
-        /* Classify references, then rank them within their children by one scan. */
-        DeviceArray rank = b.allocate((2 * std::size_t(refs) + 1) * 4, "reference ranks");
+        /* Classify references, counted per chunk; one scan of the counts ranks the chunks. */
+        DeviceArray sides = b.allocate(std::max<std::size_t>(refs, 4), "reference sides");
         DeviceArray child_box = b.allocate(2 * std::size_t(refs) * 24, "reference child boxes");
-        enqueue_kernel(q, k.classify, refs, refs, ref_tri.buffer(), ref_box.buffer(),
-                       b.triangle_data.buffer(), nodes, node_start.buffer(), node_box.buffer(),
-                       split_axis.buffer(), split_pos.buffer(), planar.buffer(), rank.buffer(),
-                       child_box.buffer());
-        b.primitives.exclusive_scan(rank.buffer(), rank.buffer(), 2 * std::size_t(refs));
+        DeviceArray chunk_rank = b.allocate((2 * std::size_t(chunks) + 1) * 4, "chunk ranks");
+        enqueue_kernel(q, k.classify, chunks, chunks, refs, nodes, node_start.buffer(),
+                       node_count.buffer(), node_chunk.buffer(), ref_tri.buffer(),
+                       ref_box.buffer(), b.triangle_data.buffer(), node_box.buffer(),
+                       split_axis.buffer(), split_pos.buffer(), planar.buffer(), sides.buffer(),
+                       child_box.buffer(), chunk_rank.buffer());
+        b.primitives.exclusive_scan(chunk_rank.buffer(), chunk_rank.buffer(),
+                                    2 * std::size_t(chunks));
 
         /* Child sizes and kinds, ranked by one scan over all slot kinds. */
         const std::size_t slot_values = std::size_t(kSlotKinds) * slots;
         DeviceArray slot = b.allocate((slot_values + 1) * 4, "child slots");
-        enqueue_kernel(q, k.count_large, nodes, nodes, node_start.buffer(), node_count.buffer(),
-                       split_axis.buffer(), cut_count.buffer(), rank.buffer(), refs, threshold,
-                       slot.buffer());
+        enqueue_kernel(q, k.count_large, nodes, nodes, node_count.buffer(), node_chunk.buffer(),
+                       split_axis.buffer(), cut_count.buffer(), chunk_rank.buffer(), chunks,
+                       threshold, slot.buffer());
         b.primitives.exclusive_scan(slot.buffer(), slot.buffer(), slot_values);
 
         /* The level's one read-back: the totals of every slot kind. */
@@ -263,10 +266,12 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
             next_count.buffer(), next_chunk.buffer(), next_id.buffer(), next_depth.buffer(),
             b.root_ref_start.buffer(), b.root_ref_count.buffer(), b.small_first.box.buffer(),
             b.small_first.id.buffer(), b.small_first.depth.buffer());
-        enqueue_kernel(q, k.distribute, refs, refs, ref_tri.buffer(), child_box.buffer(), nodes,
-                       node_start.buffer(), split_axis.buffer(), rank.buffer(), slot.buffer(),
-                       b.small_roots, b.small_refs, b.leaf_refs, next_tri.buffer(),
-                       next_ref_box.buffer(), b.small_ref_tri.buffer(), b.small_ref_box.buffer(),
+        enqueue_kernel(q, k.distribute, chunks, chunks, refs, nodes, node_start.buffer(),
+                       node_count.buffer(), node_chunk.buffer(), ref_tri.buffer(),
+                       ref_box.buffer(), sides.buffer(), child_box.buffer(), split_axis.buffer(),
+                       chunk_rank.buffer(), slot.buffer(), b.small_roots, b.small_refs,
+                       b.leaf_refs, next_tri.buffer(), next_ref_box.buffer(),
+                       b.small_ref_tri.buffer(), b.small_ref_box.buffer(),
                        b.small_ref_root.buffer(), b.leaf_store.buffer());
         // One batch per generation: a chain's nodes are each other's parents (build_output.cl).
         for (unsigned g = 0; g <= kMaxCuts; ++g) b.add_batch(total(kSlotChild + g));

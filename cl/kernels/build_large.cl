@@ -7,10 +7,18 @@
  *   kd_bin_large_chunks        SAH bins of each reduction chunk (only with KDRAY_LARGE_BINS > 0)
  *   kd_split_large_nodes       empty-space cuts (a chain of them), then the binned SAH plane or
  *                              the spatial median, per node
- *   kd_classify_references     below/above flags per reference -> scanned into ranks
+ *   kd_classify_chunks         below/above per reference, counted per reduction chunk -> the
+ *                              chunk counts, scanned
  *   kd_count_large_children    child sizes and kinds per node -> "slot" values, scanned
  *   kd_emit_large_children     node records, next level's large nodes, new small roots
- *   kd_distribute_references   references (clipped) into the next level / small roots / leaves
+ *   kd_distribute_chunks       references (clipped) into the next level / small roots / leaves
+ *
+ * The passes over the references go by reduction chunk (at most KDRAY_REDUCE_CHUNK references
+ * of one node), one work-item each, in order: a reference's rank among its node's references
+ * that go to the same child is its chunk's scanned count plus a running count, so no per-
+ * reference flags are written, scanned and read back. On the 2-core CPU the per-reference
+ * version (flags, a scan over twice the references, child boxes for every reference) moved about
+ * 260 bytes per reference and level, and the large stage was bound by memory.
  *
  * Slots: every node of the level owns two child slots (2i below, 2i+1 above), and the slot arrays
  * hold KDRAY_SLOT_KINDS segments of 2M values each (the host's SlotKind enum passes the segment
@@ -235,58 +243,68 @@ __kernel void kd_split_large_nodes(uint nodes, __global float* node_box,
     planar_sides[i] = KDRAY_BELOW;
 }
 
-/* Classify each reference of the level: flags[r] = goes below, flags[refs + r] = goes above
- * (0/1), scanned afterwards into ranks. References of leaf nodes get no flags. The reference's
- * box in each child it enters goes to child_box[side * refs + r] for kd_distribute_references:
- * a box that lies on one side is kept; a straddling one becomes the bounds of the triangle's part
- * in the child (§4.1, at worst the box cut at the plane). Clipping here, once, rather than again
- * when distributing, halved the clipping work (10% of a kitchen build). */
-__kernel void kd_classify_references(uint refs, __global const uint* ref_tri,
-                                     __global const float* ref_box,
-                                     __global const float* triangles, uint nodes,
-                                     __global const uint* node_ref_start,
-                                     __global const float* node_box,
-                                     __global const uint* split_axis,
-                                     __global const float* split_pos,
-                                     __global const uint* planar_sides, __global uint* flags,
-                                     __global float* child_box) {
-    const uint r = get_global_id(0);
-    if (r >= refs) return;
-    const uint i = kd_find_segment(node_ref_start, nodes, r);
+/* Per reference of a chunk, the children it goes to (KDRAY_BELOW | KDRAY_ABOVE), and
+ * KDRAY_CLIPPED when its box straddles the plane: its box in each child it enters is then in
+ * child_box (at [side * refs + r]), not ref_box. */
+#define KDRAY_CLIPPED 4u
+
+/* Classify chunk c's references (a leaf node's get no sides): ref_sides[r] as above, and the
+ * chunk's counts of references going below (chunk_counts[c]) and above (chunk_counts[chunks +
+ * c]), scanned afterwards. A box on one side of the plane keeps it; a straddling one becomes the
+ * bounds of the triangle's part in each child (§4.1, at worst the box cut at the plane), and a
+ * triangle that lies on one side within the node after all (a diagonal sliver) enters that side
+ * only. Clipping here, once, rather than again when distributing, halved the clipping work (10%
+ * of a kitchen build). */
+__kernel void kd_classify_chunks(uint chunks, uint refs, uint nodes,
+                                 __global const uint* node_ref_start,
+                                 __global const uint* node_ref_count,
+                                 __global const uint* node_chunk, __global const uint* ref_tri,
+                                 __global const float* ref_box, __global const float* triangles,
+                                 __global const float* node_box, __global const uint* split_axis,
+                                 __global const float* split_pos,
+                                 __global const uint* planar_sides, __global uchar* ref_sides,
+                                 __global float* child_box, __global uint* chunk_counts) {
+    const uint c = get_global_id(0);
+    if (c >= chunks) return;
+    const uint i = kd_find_segment(node_chunk, nodes, c);
+    const uint begin = node_ref_start[i] + (c - node_chunk[i]) * KDRAY_REDUCE_CHUNK;
+    const uint end = min(node_ref_start[i] + node_ref_count[i], begin + KDRAY_REDUCE_CHUNK);
     const uint axis = split_axis[i];
-    uint sides = 0;
-    if (axis != KDRAY_LEAF_AXIS) {
-        const KdBox b = kd_load_box(ref_box, r);
+    uint below = 0, above = 0;
+    if (axis == KDRAY_LEAF_AXIS) {
+        for (uint r = begin; r < end; ++r) ref_sides[r] = 0;
+    } else {
         const float split = split_pos[i];
-        sides = kd_classify(kd_axis_of(b.lo, axis), kd_axis_of(b.hi, axis), split,
-                            planar_sides[i]);
-        KdBox part[2] = {b, b};
-        if (sides == (KDRAY_BELOW | KDRAY_ABOVE)) {
-            /* The box straddles the plane; the triangle itself may still lie on one side of it
-             * within this node (a diagonal sliver): keep only the children it enters. */
-            const KdBox node = kd_load_box(node_box, i);
-            __global const float* tri =
-                triangles + (size_t)ref_tri[r] * KDRAY_FLOATS_PER_TRIANGLE;
-            uint entered = 0;
-            for (uint side = 0; side < 2; ++side) {
-                KdBox cut = b, clipped;
-                if (side == 0) cut.hi = kd_with_axis(cut.hi, axis, split);
-                else cut.lo = kd_with_axis(cut.lo, axis, split);
-                if (kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, side),
-                                            &clipped)) {
-                    entered |= side == 0 ? KDRAY_BELOW : KDRAY_ABOVE;
-                    cut.lo = fmin(fmax(cut.lo, clipped.lo), cut.hi);
-                    cut.hi = fmax(fmin(cut.hi, clipped.hi), cut.lo);
+        const uint planar = planar_sides[i];
+        const KdBox node = kd_load_box(node_box, i);
+        for (uint r = begin; r < end; ++r) {
+            const KdBox b = kd_load_box(ref_box, r);
+            uint sides = kd_classify(kd_axis_of(b.lo, axis), kd_axis_of(b.hi, axis), split, planar);
+            if (sides == (KDRAY_BELOW | KDRAY_ABOVE)) {
+                __global const float* tri =
+                    triangles + (size_t)ref_tri[r] * KDRAY_FLOATS_PER_TRIANGLE;
+                uint entered = 0;
+                for (uint side = 0; side < 2; ++side) {
+                    KdBox cut = b, clipped;
+                    if (side == 0) cut.hi = kd_with_axis(cut.hi, axis, split);
+                    else cut.lo = kd_with_axis(cut.lo, axis, split);
+                    if (kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, side),
+                                                &clipped)) {
+                        entered |= side == 0 ? KDRAY_BELOW : KDRAY_ABOVE;
+                        cut.lo = fmin(fmax(cut.lo, clipped.lo), cut.hi);
+                        cut.hi = fmax(fmin(cut.hi, clipped.hi), cut.lo);
+                    }
+                    kd_store_box(child_box, (size_t)side * refs + r, cut);
                 }
-                part[side] = cut;
+                sides = (entered ? entered : sides) | KDRAY_CLIPPED;
             }
-            if (entered) sides = entered;
+            ref_sides[r] = (uchar)sides;
+            below += (sides & KDRAY_BELOW) != 0;
+            above += (sides & KDRAY_ABOVE) != 0;
         }
-        if (sides & KDRAY_BELOW) kd_store_box(child_box, r, part[0]);
-        if (sides & KDRAY_ABOVE) kd_store_box(child_box, (size_t)refs + r, part[1]);
     }
-    flags[r] = sides & KDRAY_BELOW ? 1u : 0u;
-    flags[refs + r] = sides & KDRAY_ABOVE ? 1u : 0u;
+    chunk_counts[c] = below;
+    chunk_counts[chunks + c] = above;
 }
 
 /* Value of slot `s` of kind `k` and its rank among the level's slots of that kind, from the
@@ -302,10 +320,10 @@ inline uint kd_slot_rank(__global const uint* slot_rank, uint slots, uint k, uin
  * 1..T become small roots (§4.2), none an empty leaf. A split that separates nothing (both
  * children keep all references, e.g. a stack of coincident triangles) would recurse forever, so
  * the node becomes a leaf instead. */
-__kernel void kd_count_large_children(uint nodes, __global const uint* node_ref_start,
-                                      __global const uint* node_ref_count,
+__kernel void kd_count_large_children(uint nodes, __global const uint* node_ref_count,
+                                      __global const uint* node_chunk,
                                       __global uint* split_axis, __global const uint* cut_count,
-                                      __global const uint* ref_rank, uint refs,
+                                      __global const uint* chunk_rank, uint chunks,
                                       uint large_threshold, __global uint* slot_values) {
     const uint i = get_global_id(0);
     if (i >= nodes) return;
@@ -314,12 +332,13 @@ __kernel void kd_count_large_children(uint nodes, __global const uint* node_ref_
         slot_values[k * slots + 2 * i] = 0;
         slot_values[k * slots + 2 * i + 1] = 0;
     }
-    const uint start = node_ref_start[i], count = node_ref_count[i];
+    const uint count = node_ref_count[i];
+    const uint first = node_chunk[i], last = node_chunk[i + 1];
     uint axis = split_axis[i];
     uint n[2] = {0, 0};
     if (axis != KDRAY_LEAF_AXIS) {
-        n[0] = ref_rank[start + count] - ref_rank[start];
-        n[1] = ref_rank[refs + start + count] - ref_rank[refs + start];
+        n[0] = chunk_rank[last] - chunk_rank[first];
+        n[1] = chunk_rank[chunks + last] - chunk_rank[chunks + first];
         if (n[0] == count && n[1] == count) {
             axis = KDRAY_LEAF_AXIS;
             split_axis[i] = axis;
@@ -433,43 +452,60 @@ __kernel void kd_emit_large_children(
     records[self] = kd_build_inner(axis, split, child_id[0], child_id[1]);
 }
 
-/* Move every reference to its children (with the box kd_classify_references clipped to each
- * child), to the next level, to its small root's list, or to the leaf store. */
-__kernel void kd_distribute_references(
-    uint refs, __global const uint* ref_tri, __global const float* child_box, uint nodes,
-    __global const uint* node_ref_start, __global const uint* split_axis,
-    __global const uint* ref_rank, __global const uint* slot_rank, uint small_root_base,
-    uint small_ref_base, uint leaf_ref_base, __global uint* next_ref_tri,
-    __global float* next_ref_box, __global uint* small_ref_tri, __global float* small_ref_box,
-    __global uint* small_ref_root, __global uint* leaf_refs) {
-    const uint r = get_global_id(0);
-    if (r >= refs) return;
+/* Move chunk c's references to their children (with the box kd_classify_chunks clipped to each
+ * child of a straddling one), to the next level, to its small root's list, or to the leaf store,
+ * in reference order: a reference's rank in its child is the chunk's scanned count plus those
+ * before it in the chunk. */
+__kernel void kd_distribute_chunks(
+    uint chunks, uint refs, uint nodes, __global const uint* node_ref_start,
+    __global const uint* node_ref_count, __global const uint* node_chunk,
+    __global const uint* ref_tri, __global const float* ref_box,
+    __global const uchar* ref_sides, __global const float* child_box,
+    __global const uint* split_axis, __global const uint* chunk_rank,
+    __global const uint* slot_rank, uint small_root_base, uint small_ref_base,
+    uint leaf_ref_base, __global uint* next_ref_tri, __global float* next_ref_box,
+    __global uint* small_ref_tri, __global float* small_ref_box, __global uint* small_ref_root,
+    __global uint* leaf_refs) {
+    const uint c = get_global_id(0);
+    if (c >= chunks) return;
     const uint slots = 2 * nodes;
-    const uint i = kd_find_segment(node_ref_start, nodes, r);
+    const uint i = kd_find_segment(node_chunk, nodes, c);
     const uint start = node_ref_start[i];
-    const uint tri = ref_tri[r];
+    const uint begin = start + (c - node_chunk[i]) * KDRAY_REDUCE_CHUNK;
+    const uint end = min(start + node_ref_count[i], begin + KDRAY_REDUCE_CHUNK);
     if (split_axis[i] == KDRAY_LEAF_AXIS) {
-        leaf_refs[leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i) +
-                  (r - start)] = tri;
+        const uint first =
+            leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i) - start;
+        for (uint r = begin; r < end; ++r) leaf_refs[first + r] = ref_tri[r];
         return;
     }
+    /* Per child: where its references go (the next level's large node or a small root's list)
+     * and how many of the node's references for it come before this chunk. */
+    uint dst[2], large[2], root[2];
     for (uint side = 0; side < 2; ++side) {
-        const uint k = side * refs + r;
-        if (ref_rank[k + 1] == ref_rank[k]) continue; /* not in this child */
-        const uint within = ref_rank[k] - ref_rank[side * refs + start];
         const uint s = 2 * i + side;
-        const KdBox b = kd_load_box(child_box, k);
-        if (kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s)) {
-            const uint dst = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s) + within;
-            next_ref_tri[dst] = tri;
-            kd_store_box(next_ref_box, dst, b);
-        } else {
-            const uint dst =
-                small_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s) + within;
-            small_ref_tri[dst] = tri;
-            kd_store_box(small_ref_box, dst, b);
-            small_ref_root[dst] =
-                small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
+        large[side] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s);
+        const uint within = chunk_rank[side * chunks + c] - chunk_rank[side * chunks + node_chunk[i]];
+        dst[side] = within + (large[side] ? kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s)
+                                          : small_ref_base + kd_slot_rank(slot_rank, slots,
+                                                                          KDRAY_SLOT_SMALL_REFS, s));
+        root[side] = small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
+    }
+    for (uint r = begin; r < end; ++r) {
+        const uint sides = ref_sides[r], tri = ref_tri[r];
+        for (uint side = 0; side < 2; ++side) {
+            if (!(sides & (side == 0 ? KDRAY_BELOW : KDRAY_ABOVE))) continue;
+            const KdBox b = kd_load_box(sides & KDRAY_CLIPPED ? child_box : ref_box,
+                                        sides & KDRAY_CLIPPED ? (size_t)side * refs + r : r);
+            const uint at = dst[side]++;
+            if (large[side]) {
+                next_ref_tri[at] = tri;
+                kd_store_box(next_ref_box, at, b);
+            } else {
+                small_ref_tri[at] = tri;
+                kd_store_box(small_ref_box, at, b);
+                small_ref_root[at] = root[side];
+            }
         }
     }
 }
