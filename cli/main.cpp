@@ -3,6 +3,10 @@
 // caught: `kdray: error: ...` on stderr, exit status 2 for usage errors and 1 for everything else.
 #include <CLI/CLI.hpp>
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 #include <exception>
 #include <iostream>
 #include <new>
@@ -49,7 +53,25 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
 
 }  // namespace
 
+namespace {
+
+/// On a CPU device (PoCL) device buffers are host memory from malloc, and a build or a frame
+/// allocates and frees a few hundred of them. glibc maps large blocks afresh and trims the heap
+/// behind freed ones, so every build touched new pages: 11,500 page faults per BART Kitchen
+/// build. Keeping blocks of up to 32 MiB in the heap, and not trimming it below 512 MiB, lets
+/// later builds and frames reuse them: 3,900 faults per build, CPU time per build -10% (perf
+/// stat, 12 builds, 2 cores). GPU drivers allocate device memory apart and are unaffected.
+void keep_freed_memory_for_reuse() {
+#ifdef __GLIBC__
+    mallopt(M_MMAP_THRESHOLD, 32 << 20);
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+#endif
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+    keep_freed_memory_for_reuse();
     CLI::App app{"kdray: kd-trees built on an OpenCL device (Zhou et al. 2008), ray traced"};
     app.require_subcommand(1);
     app.set_version_flag("--version", "kdray 0.1.0");
