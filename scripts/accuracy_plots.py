@@ -75,7 +75,7 @@ def tables_markdown(header, tree_rows, image_rows, robust_rows):
         ("scene", lambda b: f"{b['scene']} ({b['kind']}, {b['triangles']} tris)"),
         ("fastest build + trace", lambda b: f"{b['rebuilt']['setting']}: "
          f"{b['rebuilt']['build_ms']:.0f} + {b['rebuilt']['trace_ms']:.0f} ms"),
-        ("default T=64, C_e=0.25", lambda b: f"{b['default']['build_ms']:.0f} + "
+        ("default T=64, C_e=0.25, 32 bins", lambda b: f"{b['default']['build_ms']:.0f} + "
          f"{b['default']['trace_ms']:.0f} ms"),
         ("fastest trace", lambda b: f"{b['traced']['setting']}: {b['traced']['trace_ms']:.0f} ms"
          f" ({pct(b['traced']['trace_ms'], b['default']['trace_ms'])} vs default)"),
@@ -122,7 +122,8 @@ def plot_tree_quality(plt, path, tree_rows):
         top, bottom = axes[0][col], axes[1][col]
         for r in rows:
             colour = "tab:red" if r["builder"] == "reference" else (
-                "tab:blue" if r["setting"].startswith("T=") else "tab:green")
+                "tab:blue" if r["setting"].startswith("T=") else
+                "tab:green" if r["setting"].startswith("C_e=") else "tab:purple")
             top.scatter(r["build_ms"], r["sah_cost"], color=colour)
             top.annotate(r["setting"], (r["build_ms"], r["sah_cost"]), fontsize=7,
                          xytext=(3, 3), textcoords="offset points")
@@ -174,7 +175,8 @@ def plot_image_accuracy(plt, path, image_rows):
     plt.close(fig)
 
 
-MODE_COLOURS = {"watertight": "tab:blue", "moller": "tab:orange", "Embree peer": "tab:grey"}
+MODE_COLOURS = {"watertight": "tab:blue", "watertight, packets": "tab:green",
+                "moller": "tab:orange", "Embree peer": "tab:grey"}
 
 
 def plot_robustness(plt, path, robust_rows):

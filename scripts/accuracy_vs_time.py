@@ -2,7 +2,8 @@
 """What accuracy costs in time: three sweeps, each measured, tabled and plotted.
 
 1. Tree quality against build time. The OpenCL builder's large-node threshold T (Zhou et al.'s
-   T, 1..64) and empty-space ratio C_e, and the CPU reference full-SAH builder as the far end.
+   T, 1..64), empty-space ratio C_e and large-node split (SAH bins per axis; 0 is the paper's
+   spatial median), and the CPU reference full-SAH builder as the far end.
    Per setting: build ms, SAH cost, trace ms of primary + shadow rays (the scene's render file
    with its first light only and max_depth 1), and frame ms: build + trace for a dynamic scene
    (rebuilt every frame), trace alone for a static one (built once, traced many times).
@@ -64,13 +65,14 @@ class Plan:
         self.timing_scenes = [("testdata/cornell", td("cornell", "room.obj"),
                                td("cornell", "render.json"))]
         if quick:
-            self.thresholds, self.empty_ratios = [1, 8, 64], [0.0, 0.5]
+            self.thresholds, self.empty_ratios, self.large_bins = [1, 8, 64], [0.0, 0.5], [0]
             self.static_repeats, self.rounds = 2, 1
             self.spps, self.depths, self.depth_spp = [1, 4, 16], [1, 2, 4, 8], 4
             self.reference_spp = 64
             self.hard_width = 33
             return
         self.thresholds, self.empty_ratios = [1, 2, 4, 8, 16, 32, 64], [0.0, 0.1, 0.5]
+        self.large_bins = [0, 8, 16, 64]
         self.static_repeats, self.rounds = 3, 2
         self.spps, self.depths, self.depth_spp = [1, 2, 4, 8, 16, 32, 64], list(range(1, 9)), 16
         self.reference_spp = 256
@@ -98,6 +100,8 @@ def tree_configs(plan):
     """(label, kdray builder options, T, C_e) from the cheapest trees to the full SAH."""
     configs = [(f"T={t}", ["--large-threshold", str(t)], t, 0.25) for t in plan.thresholds]
     configs += [(f"C_e={c:g}", ["--empty-ratio", str(c)], 64, c) for c in plan.empty_ratios]
+    configs += [("median" if b == 0 else f"bins={b}", ["--large-bins", str(b)], 64, 0.25)
+                for b in plan.large_bins]
     configs.append(("reference SAH", ["--builder", "reference"], "", ""))
     return configs
 
@@ -238,7 +242,11 @@ def sweep_image_accuracy(kdray, plan, tmp, log):
 
 def sweep_robustness(kdray, plan, tmp, peer, log):
     rows = []
-    modes = ("watertight", "moller")
+    # Both tests one ray at a time, and the watertight test's packets (CPU devices' default; the
+    # same hits): the tests' costs compare only like for like.
+    modes = {"watertight": ["--intersect", "watertight", "--packets", "off"],
+             "watertight, packets": ["--intersect", "watertight", "--packets", "on"],
+             "moller": ["--intersect", "moller"]}
     # Speed: primary + shadow rays (first light, max_depth 1) on ordinary scenes, best of 3.
     for scene, obj, render in plan.timing_scenes:
         with open(render) as f:
@@ -250,7 +258,7 @@ def sweep_robustness(kdray, plan, tmp, peer, log):
         for mode in modes:
             out = os.path.join(tmp, "speed-out")
             shutil.rmtree(out, ignore_errors=True)
-            frames = kdray_render(kdray, objs, render_file, out, ["--intersect", mode])["frames"]
+            frames = kdray_render(kdray, objs, render_file, out, modes[mode])["frames"]
             rows.append({"scene": scene, "case": "ordinary", "intersect": mode,
                          "pixels": "", "trace_ms": min(f["trace_ms"] for f in frames),
                          "leaks": "", "embree_hit_miss": ""})
@@ -269,8 +277,8 @@ def sweep_robustness(kdray, plan, tmp, peer, log):
                          "trace_ms": embree["trace_ms"],
                          "leaks": embree["rays"] - embree["hit_pixels"], "embree_hit_miss": 0})
         for mode in modes:
-            out = os.path.join(tmp, "hard-out", case, mode)
-            frame = kdray_render(kdray, [obj], render, out, ["--intersect", mode, "--aov"])
+            out = os.path.join(tmp, "hard-out", case, mode.replace(", ", "-"))
+            frame = kdray_render(kdray, [obj], render, out, modes[mode] + ["--aov"])
             frame = frame["frames"][0]
             pixels = frame["rays"]["primary"]
             mismatch = ""
@@ -320,7 +328,7 @@ def check(tree_rows, image_rows, robust_rows, plan):
     for r in robust_rows:
         if not r["trace_ms"] > 0:
             problems.append(f"robustness: invalid row {r}")
-        if r["intersect"] == "watertight" and r["leaks"] not in ("", 0):
+        if r["intersect"].startswith("watertight") and r["leaks"] not in ("", 0):
             problems.append(f"robustness: the watertight test leaks: {r}")
     return problems
 
