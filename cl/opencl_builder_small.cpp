@@ -40,7 +40,8 @@ void run_small_stage(Build& b, int max_depth, cl_uint first_scale) {
         enqueue_kernel(
             q, k.build_subtrees, b.small_roots, b.small_roots, b.small_first.box.buffer(),
             b.small_first.depth.buffer(), b.root_ref_start.buffer(), b.root_ref_count.buffer(),
-            b.small_ref_box.buffer(), side_masks.buffer(), cl_float(b.params.costs.traversal),
+            b.small_ref_box.buffer(), side_masks.buffer(), b.small_ref_tri.buffer(),
+            b.triangle_data.buffer(), cl_float(b.params.costs.traversal),
             cl_float(b.params.costs.intersection), cl_float(b.params.empty_bonus),
             cl_uint(max_depth), scale, first_scale, records.buffer(), b.subtree_node_count.buffer(),
             b.subtree_leaf_refs.buffer(), totals.buffer());

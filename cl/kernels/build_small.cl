@@ -164,6 +164,43 @@ inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global cons
     return best_candidate;
 }
 
+/* Whether the plane of triangle tri (9 floats) misses the box: its corners all lie on one side
+ * of it (the normal's test of Akenine-Moller's triangle-box overlap), by more than the rounding
+ * of the normal, which a sliver or a collapsed triangle makes as large as the normal itself. */
+inline int kd_plane_misses_box(__global const float* tri, KdBox box) {
+    const float3 a = (float3)(tri[0], tri[1], tri[2]);
+    const float3 e1 = (float3)(tri[3], tri[4], tri[5]) - a, e2 = (float3)(tri[6], tri[7], tri[8]) - a;
+    const float3 n = cross(e1, e2);
+    const float3 centre = 0.5f * (box.lo + box.hi), half_extent = 0.5f * (box.hi - box.lo);
+    const float3 to_centre = centre - a;
+    const float distance = dot(n, to_centre), radius = dot(fabs(n), half_extent);
+    /* The normal is off by a few ulps of |e1| |e2| per component; the distances by that times
+     * the lever arm. */
+    const float reach = fabs(to_centre.x) + fabs(to_centre.y) + fabs(to_centre.z) +
+                        half_extent.x + half_extent.y + half_extent.z;
+    const float slack = 1e-5f * (fabs(distance) + radius) + 1e-4f * length(e1) * length(e2) * reach;
+    return fabs(distance) > radius + slack;
+}
+
+/* The masks carry the small root's boxes, which a node's box does not clip, so a triangle whose
+ * box straddles a split may still miss one child inside this node (a long diagonal triangle past
+ * the corner of a deep node). A straddling triangle whose plane misses a child's box leaves
+ * that child. */
+inline void kd_drop_missed_triangles(ulong* below, ulong* above, KdBox box, uint axis, float split,
+                                     uint start, __global const uint* ref_tri,
+                                     __global const float* triangles) {
+    for (ulong rest = *below & *above; rest != 0; rest &= rest - 1) {
+        const ulong bit = rest & (0ul - rest);
+        const uint j = (uint)popcount(bit - 1ul);
+        __global const float* tri =
+            triangles + (size_t)ref_tri[start + j] * KDRAY_FLOATS_PER_TRIANGLE;
+        const int miss_below = kd_plane_misses_box(tri, kd_child_box(box, axis, split, 0));
+        const int miss_above = kd_plane_misses_box(tri, kd_child_box(box, axis, split, 1));
+        if (miss_above && !miss_below) *above &= ~bit;
+        if (miss_below && !miss_above) *below &= ~bit;
+    }
+}
+
 /* A node waiting on the subtree builder's stack: the above child of the split node `parent`. */
 typedef struct KdPendingNode {
     KdBox box;
@@ -188,7 +225,8 @@ typedef struct KdPendingNode {
 __kernel void kd_build_small_subtrees(
     uint roots, __global const float* root_box, __global const uint* root_depth,
     __global const uint* root_ref_start, __global const uint* root_ref_count,
-    __global const float* ref_box, __global const ulong* side_masks, float cost_traversal,
+    __global const float* ref_box, __global const ulong* side_masks,
+    __global const uint* ref_tri, __global const float* triangles, float cost_traversal,
     float cost_intersection, float empty_bonus, uint max_depth, uint budget_scale,
     uint first_scale, __global uint4* subtree_nodes, __global uint* subtree_node_count,
     __global uint* subtree_leaf_refs, __global uint* totals) {
@@ -246,6 +284,8 @@ __kernel void kd_build_small_subtrees(
             vstore8(below, 0, children[0]);
             vstore8(above, 0, children[1]);
         }
+        kd_drop_missed_triangles(&children[0][k], &children[1][k], node.box, axis, split, start,
+                                 ref_tri, triangles);
         if (at < budget) out[at] = (uint4)(axis, as_uint(split), 0, 0);
         KdPendingNode above;
         above.box = kd_child_box(node.box, axis, split, 1);
