@@ -210,10 +210,10 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
         DeviceArray child_box = b.allocate(2 * std::size_t(refs) * 24, "reference child boxes");
         DeviceArray chunk_rank = b.allocate((2 * std::size_t(chunks) + 1) * 4, "chunk ranks");
         enqueue_kernel(q, k.classify, chunks, chunks, refs, nodes, node_start.buffer(),
-                       node_count.buffer(), node_chunk.buffer(), ref_tri.buffer(),
-                       ref_box.buffer(), b.triangle_data.buffer(), node_box.buffer(),
-                       split_axis.buffer(), split_pos.buffer(), planar.buffer(), sides.buffer(),
-                       child_box.buffer(), chunk_rank.buffer());
+                       node_count.buffer(), node_chunk.buffer(), ref_tri.buffer(), ref_box.buffer(),
+                       b.triangle_data.buffer(), node_box.buffer(), split_axis.buffer(),
+                       split_pos.buffer(), planar.buffer(), sides.buffer(), child_box.buffer(),
+                       chunk_rank.buffer());
         b.primitives.exclusive_scan(chunk_rank.buffer(), chunk_rank.buffer(),
                                     2 * std::size_t(chunks));
 
@@ -267,11 +267,10 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
             b.root_ref_start.buffer(), b.root_ref_count.buffer(), b.small_first.box.buffer(),
             b.small_first.id.buffer(), b.small_first.depth.buffer());
         enqueue_kernel(q, k.distribute, chunks, chunks, refs, nodes, node_start.buffer(),
-                       node_count.buffer(), node_chunk.buffer(), ref_tri.buffer(),
-                       ref_box.buffer(), sides.buffer(), child_box.buffer(), split_axis.buffer(),
-                       chunk_rank.buffer(), slot.buffer(), b.small_roots, b.small_refs,
-                       b.leaf_refs, next_tri.buffer(), next_ref_box.buffer(),
-                       b.small_ref_tri.buffer(), b.small_ref_box.buffer(),
+                       node_count.buffer(), node_chunk.buffer(), ref_tri.buffer(), ref_box.buffer(),
+                       sides.buffer(), child_box.buffer(), split_axis.buffer(), chunk_rank.buffer(),
+                       slot.buffer(), b.small_roots, b.small_refs, b.leaf_refs, next_tri.buffer(),
+                       next_ref_box.buffer(), b.small_ref_tri.buffer(), b.small_ref_box.buffer(),
                        b.small_ref_root.buffer(), b.leaf_store.buffer());
         // One batch per generation: a chain's nodes are each other's parents (build_output.cl).
         for (unsigned g = 0; g <= kMaxCuts; ++g) b.add_batch(total(kSlotChild + g));
@@ -299,14 +298,14 @@ void prepare_opencl_builder(ClDevice& device, const BuildParams& params) {
 }
 
 KdTree build_opencl(ClDevice& device, const Scene& scene, const BuildParams& params,
-                    BuildReport* report) {
+                    BuildReport* report, DeviceTree* on_device) {
     return detail::build_opencl_with_subtree_budget(device, scene, params, kSubtreeBudgetScale,
-                                                    report);
+                                                    report, on_device);
 }
 
 KdTree detail::build_opencl_with_subtree_budget(ClDevice& device, const Scene& scene,
                                                 const BuildParams& params, unsigned scale,
-                                                BuildReport* report) {
+                                                BuildReport* report, DeviceTree* on_device) {
     const auto start = std::chrono::steady_clock::now();
     KdTree tree;
     tree.bounds = scene.bounds();
@@ -359,6 +358,7 @@ KdTree detail::build_opencl_with_subtree_budget(ClDevice& device, const Scene& s
                                       tree.leaf_indices.data());
     });
     clock.lap("download");
+    if (on_device) *on_device = {nodes.buffer(), leaf_indices.buffer(), b.triangle_data.buffer()};
     if (report) {
         report->build_ms =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)

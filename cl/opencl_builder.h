@@ -1,10 +1,12 @@
 // opencl_builder.h — kd-tree construction on an OpenCL device with the algorithm of Zhou, Hou,
 // Wang and Guo, "Real-time kd-tree construction on graphics hardware" (ACM TOG 27(5), 2008):
-// a large-node stage (empty-space cutting and spatial-median splits of every large node of a
-// level at once), a small-node stage (exact SAH with 64-bit triangle masks) and a preorder output
-// stage, all on the device; the host only launches kernels and reads back the counts that size
-// the next launch.
+// a large-node stage (empty-space cutting, then binned-SAH or spatial-median splits of every
+// large node of a level at once), a small-node stage (exact SAH with 64-bit triangle masks) and a
+// preorder output stage, all on the device; the host only launches kernels and reads back the
+// counts that size the next launch.
 #pragma once
+
+#include <CL/opencl.hpp>
 
 #include "cl/device.h"
 #include "core/kd_tree.h"
@@ -20,13 +22,19 @@ namespace kdray {
 /// OpenCL failure, naming the step. An empty scene gives a single empty leaf.
 /// Builds (through cl/program_cache) every OpenCL program build_opencl uses on `device`, so that a
 /// caller can keep program compilation out of its first build's time; a later build_opencl on the
-/// device then builds no program. `params` are the parameters the builds will use: the programs do
-/// not depend on them today (every parameter is a kernel argument), so any params prepare the same
-/// programs, but a caller need not know that.
+/// device with the same `params` then builds no program (large_split_bins is compiled in).
 void prepare_opencl_builder(ClDevice& device, const BuildParams& params = {});
 
+/// The tree as it already lies on the device after a build: the preorder nodes, the leaf
+/// indices and the scene's triangles (9 floats each), so that a renderer on the same device need
+/// not upload them again. The buffers stay valid as long as this object holds them.
+struct DeviceTree {
+    cl::Buffer nodes, leaf_indices, triangles;
+};
+
+/// When `on_device` is given it receives the built tree's device buffers.
 KdTree build_opencl(ClDevice& device, const Scene& scene, const BuildParams& params = {},
-                    BuildReport* report = nullptr);
+                    BuildReport* report = nullptr, DeviceTree* on_device = nullptr);
 
 namespace detail {
 /// build_opencl with the small stage's first budget of node records given: `scale` * (n + 1)
@@ -34,7 +42,8 @@ namespace detail {
 /// again in a second pass; tests pass 1 so that most subtrees take that path.
 KdTree build_opencl_with_subtree_budget(ClDevice& device, const Scene& scene,
                                         const BuildParams& params, unsigned scale,
-                                        BuildReport* report = nullptr);
+                                        BuildReport* report = nullptr,
+                                        DeviceTree* on_device = nullptr);
 }  // namespace detail
 
 }  // namespace kdray

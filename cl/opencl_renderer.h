@@ -4,6 +4,7 @@
 #pragma once
 
 #include "cl/device.h"
+#include "cl/opencl_builder.h"
 #include "core/frame.h"
 #include "core/kd_tree.h"
 #include "core/render_setup.h"
@@ -23,7 +24,9 @@ void prepare_opencl_renderer(ClDevice& device, kd_u32 effects,
 /// Renders one frame. The render program is built once per effects combination and triangle
 /// test (inputs.intersect) and reused. With packets (inputs.packets), kd_trace_camera_packets
 /// traces each launch's primary rays first and kd_render_pixels shades from their hits.
+/// `on_device`, when given, is `tree` and the scene's triangles as build_opencl left them on this
+/// device: they are traced where they lie instead of being uploaded again.
 FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& scene,
-                          const RenderInputs& inputs);
+                          const RenderInputs& inputs, const DeviceTree* on_device = nullptr);
 
 }  // namespace kdray

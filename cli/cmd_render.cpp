@@ -88,7 +88,8 @@ nlohmann::json render_frame(RenderRun& run, std::size_t i, const Scene& scene, d
                                 render_inputs.intersect, render_inputs.packets);
     auto trace_start = Clock::now();
     FrameResult result = command.tracer == "opencl"
-                             ? render_opencl(run.session.device(), built.tree, scene, render_inputs)
+                             ? render_opencl(run.session.device(), built.tree, scene, render_inputs,
+                                             &built.on_device)
                              : render_reference(built.tree, scene, render_inputs, command.threads);
     double trace_ms = ms_since(trace_start);
 

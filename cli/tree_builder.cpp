@@ -29,7 +29,8 @@ BuiltTree TreeBuilder::build(const Scene& scene) {
                 .count();
         built.report.timings_ms.push_back({"build", built.report.build_ms});
     } else {
-        built.tree = build_opencl(session_.device(), scene, options_.params, &built.report);
+        built.tree = build_opencl(session_.device(), scene, options_.params, &built.report,
+                                  &built.on_device);
     }
     return built;
 }

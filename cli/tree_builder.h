@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "cl/opencl_builder.h"
 #include "cli/commands.h"
 #include "cli/device_session.h"
 #include "core/kd_tree.h"
@@ -14,6 +15,7 @@ namespace kdray::cli {
 struct BuiltTree {
     KdTree tree;
     BuildReport report;
+    DeviceTree on_device;  // the OpenCL builder's tree where it lies (empty for the reference)
 };
 
 class TreeBuilder {
