@@ -32,8 +32,9 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
     app.add_option("--large-threshold", o.params.large_node_threshold,
-                   "OpenCL builder: nodes with more triangles are 'large' (median/empty-space "
-                   "splits); the rest get the full SAH (Zhou et al.'s T, at most 64)")
+                   "OpenCL builder: nodes with more triangles are 'large' (empty-space cuts, then "
+                   "a binned-SAH or median split); the rest get the full SAH (Zhou et al.'s T, "
+                   "at most 64)")
         ->check(CLI::Range(0, 64))
         ->capture_default_str();
     app.add_option("--empty-ratio", o.params.empty_space_ratio,

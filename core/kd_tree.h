@@ -28,8 +28,9 @@ struct BuildParams {
     SahCosts costs;
     /// Reference builder: a split with an empty side has its cost scaled by (1 - empty_bonus).
     float empty_bonus = 0.2f;
-    /// Zhou et al.: nodes with more than this many triangles are "large" (spatial median and
-    /// empty-space cutting); the rest are split by the full SAH with bit masks.
+    /// Zhou et al.: nodes with more than this many triangles are "large" (empty-space cutting,
+    /// then a binned-SAH or spatial-median split); the rest are split by the full SAH with bit
+    /// masks.
     int large_node_threshold = 64;
     /// Zhou et al. C_e: cut off empty space when the empty slab exceeds this share of the extent.
     float empty_space_ratio = 0.25f;
