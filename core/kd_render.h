@@ -388,6 +388,17 @@ KDRAY_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView* vie
         kd_f32 rgb[3];
         KdHit hit;
         if (traced) hit = traced[s * traced_stride];
+        if (traced && hit.prim == KDRAY_NO_HIT) {
+            /* A traced primary ray that missed is the background, as kd_trace_sample makes it,
+             * without the ray: most of a framed mesh's pixels (the dragon's: 85%). */
+            out.rays.primary += 1u;
+            if (view->spp == 1u) {
+                out.centre_hit = hit;
+                kd_set3(out.normal, 0.0f, 0.0f, 0.0f);
+            }
+            for (int c = 0; c < 3; ++c) out.rgb[c] += view->background[c];
+            continue;
+        }
         kd_trace_sample(scene, view, kd_primary_ray(view, x, y, s), traced ? &hit : 0, rgb,
                         &out.rays, view->spp == 1u ? &out.centre_hit : 0, out.normal);
         for (int c = 0; c < 3; ++c) out.rgb[c] += rgb[c];
