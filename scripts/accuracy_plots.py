@@ -143,7 +143,8 @@ def plot_tree_quality(plt, path, tree_rows):
         bottom.set_xlabel("build ms")
         bottom.set_ylabel("trace ms (primary + shadow)")
     fig.suptitle("Tree quality against build time\nblue: large-node threshold T (C_e 0.25), "
-                 "green: empty-space ratio C_e (T 64), red: reference full SAH; "
+                 "green: empty-space ratio C_e (T 64), purple: large-node split (median or "
+                 "SAH bins), red: reference full SAH; "
                  "dotted: equal build + trace", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
