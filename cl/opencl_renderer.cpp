@@ -5,6 +5,7 @@
 #include <string>
 
 #include "cl/cl_error.h"
+#include "cl/launch.h"
 #include "cl/program_cache.h"
 #include "core/kd_render.h"
 
@@ -177,31 +178,18 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
         "primary hit buffer");
     cl::Kernel packet;
     with_cl_context("rendering a frame on " + device.info().name, [&] {
+        // first_row and rows (0 here) are set per launch.
         if (packets) {
             packet = render_kernel(device, inputs.effects.bits(), inputs.intersect,
                                    "kd_trace_camera_packets");
-            packet.setArg(0, nodes);
-            packet.setArg(1, leaf_indices);
-            packet.setArg(2, triangles);
-            packet.setArg(3, bounds_buffer);
-            packet.setArg(4, sizeof(KdView), &view);
-            packet.setArg(7, traced);
+            set_kernel_args(packet, nodes, leaf_indices, triangles, bounds_buffer, view, kd_u32(0),
+                            kd_u32(0), traced);
         }
-        kernel.setArg(0, nodes);
-        kernel.setArg(1, leaf_indices);
-        kernel.setArg(2, triangles);
-        kernel.setArg(3, material_ids);
-        kernel.setArg(4, materials);
-        kernel.setArg(5, lights);
-        kernel.setArg(6, bounds_buffer);
-        kernel.setArg(7, sizeof(KdView), &view);
-        kernel.setArg(10, rgb);
-        kernel.setArg(11, hits);
-        kernel.setArg(12, normals);
-        kernel.setArg(13, counts);
-        kernel.setArg(14, traced);
-        kernel.setArg(15, kd_u32((packets ? KDRAY_RENDER_TRACED_PRIMARY : 0u) |
-                                 (inputs.normals ? KDRAY_RENDER_NORMALS : 0u)));
+        const kd_u32 outputs = (packets ? KDRAY_RENDER_TRACED_PRIMARY : 0u) |
+                               (inputs.normals ? KDRAY_RENDER_NORMALS : 0u);
+        set_kernel_args(kernel, nodes, leaf_indices, triangles, material_ids, materials, lights,
+                        bounds_buffer, view, kd_u32(0), kd_u32(0), rgb, hits, normals, counts,
+                        traced, outputs);
         for (std::size_t row = 0; row < view.height; row += step) {
             const std::size_t rows = std::min<std::size_t>(step, view.height - row);
             if (packets) enqueue_packets(device, packet, view, row, rows);

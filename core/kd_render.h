@@ -104,13 +104,12 @@ KDRAY_INLINE kd_f32 kd_pow_positive(kd_f32 x, kd_f32 y) {
     return KDRAY_EXP2(y * KDRAY_LOG2(x));
 }
 
-/* A 32-bit integer hash (Wellons' lowbias32): decorrelated jitter without per-pixel state. */
+/* A 32-bit integer hash (Wellons' lowbias32): decorrelated jitter without per-pixel state. The
+ * steps are a macro so that a kernel can hash a vector of 32-bit lanes with the same code. */
+#define KDRAY_LOWBIAS32(x) \
+    ((x) ^= (x) >> 16, (x) *= 0x7feb352du, (x) ^= (x) >> 15, (x) *= 0x846ca68bu, (x) ^= (x) >> 16)
 KDRAY_INLINE kd_u32 kd_hash(kd_u32 x) {
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
+    KDRAY_LOWBIAS32(x);
     return x;
 }
 KDRAY_INLINE kd_f32 kd_unit_float(kd_u32 h) {

@@ -136,6 +136,14 @@ Scene uneven_clusters() {
     return make_scene(std::move(tris), "uneven_clusters");
 }
 
+/// SAH cost of the OpenCL builder's tree and of the reference builder's, with `params`.
+std::pair<double, double> sah_costs(const Scene& scene, const BuildParams& params) {
+    const KdTree gpu = build_opencl(test::opencl_test_device(), scene, params);
+    const KdTree ref = build_reference(scene, params);
+    return {compute_tree_stats(gpu, scene.triangle_count(), params.costs).sah_cost,
+            compute_tree_stats(ref, scene.triangle_count(), params.costs).sah_cost};
+}
+
 // The paper's large-node split, the spatial median, which some tests pin down.
 BuildParams median_split() {
     BuildParams params;
@@ -157,27 +165,19 @@ TEST_CASE("opencl builder: random scenes of several sizes") {
 TEST_CASE("opencl builder: SAH cost within a reasonable factor of the reference builder") {
     for (int seed = 0; seed < 3; ++seed) {
         const Scene scene = test::random_triangles(4000, 77 + seed, 1.0f, 0.05f);
-        const BuildParams params;
-        const KdTree gpu = build_opencl(test::opencl_test_device(), scene, params);
-        const KdTree ref = build_reference(scene, params);
-        const double gpu_cost =
-            compute_tree_stats(gpu, scene.triangle_count(), params.costs).sah_cost;
-        const double ref_cost =
-            compute_tree_stats(ref, scene.triangle_count(), params.costs).sah_cost;
+        const auto [gpu_cost, ref_cost] = sah_costs(scene, {});
         CAPTURE(gpu_cost);
         CAPTURE(ref_cost);
-        CHECK(gpu_cost <= 1.35 * ref_cost);
+        // 1.06 here, with the binned split or the spatial median alike (random triangles fill
+        // their cube evenly); the shared scenes' figures are docs/bench-build.md's.
+        CHECK(gpu_cost <= 1.12 * ref_cost);
     }
 }
 
 TEST_CASE("opencl builder: planar triangles take the cheaper side, flat faces become leaves") {
     const Scene scene = box_room();
     check_build(scene, "box_room");
-    const BuildParams params;
-    const KdTree gpu = build_opencl(test::opencl_test_device(), scene, params);
-    const KdTree ref = build_reference(scene, params);
-    const double gpu_cost = compute_tree_stats(gpu, scene.triangle_count(), params.costs).sah_cost;
-    const double ref_cost = compute_tree_stats(ref, scene.triangle_count(), params.costs).sah_cost;
+    const auto [gpu_cost, ref_cost] = sah_costs(scene, {});
     CAPTURE(gpu_cost);
     CAPTURE(ref_cost);
     // What still separates the two is the reference's clipping of each triangle to every node

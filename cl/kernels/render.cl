@@ -33,11 +33,7 @@ inline KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd
 
 /* kd_hash and kd_unit_float of core/kd_render.h, per lane. */
 inline uint16 kd_hash16(uint16 x) {
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
+    KDRAY_LOWBIAS32(x);
     return x;
 }
 inline float16 kd_unit_float16(uint16 h) {
