@@ -33,12 +33,12 @@ std::size_t rows_per_launch(const KdView& view, bool packets) {
     return std::max<std::size_t>(1, pixels_per_launch / std::max<kd_u32>(1, view.width));
 }
 
-/// Pixels of a packet tile (render.cl's KDRAY_PACKET_TILE) and packet tiles per work-group.
-constexpr std::size_t kPacketTile = 4, kPacketGroup = 4;
+/// Packet tiles (KDRAY_PACKET_TILE pixels square) per work-group.
+constexpr std::size_t kPacketGroup = 4;
 
-bool use_packets(const ClDevice& device, const RenderInputs& inputs) {
-    if (inputs.intersect != KDRAY_INTERSECT_WATERTIGHT) return false;
-    switch (inputs.packets) {
+bool use_packets(const ClDevice& device, kd_u32 intersect, RenderInputs::Packets packets) {
+    if (intersect != KDRAY_INTERSECT_WATERTIGHT) return false;
+    switch (packets) {
         case RenderInputs::Packets::On:
             return true;
         case RenderInputs::Packets::Off:
@@ -82,6 +82,25 @@ std::size_t round_up(std::size_t n, std::size_t multiple) {
     return (n + multiple - 1) / multiple * multiple;
 }
 
+/// The device buffers a frame's kernels read and write.
+struct RenderBuffers {
+    cl::Buffer nodes, leaf_indices, triangles, material_ids, materials, lights, bounds;
+    cl::Buffer rgb, hits, normals, counts, traced;
+};
+
+/// Every argument of kd_render_pixels (render.cl) and of kd_trace_camera_packets, in their
+/// order; first_row and rows are set per launch (enqueue_rows, enqueue_packets).
+void set_pixel_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& view,
+                    kd_u32 outputs) {
+    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.material_ids, b.materials,
+                    b.lights, b.bounds, view, kd_u32(0), kd_u32(0), b.rgb, b.hits, b.normals,
+                    b.counts, b.traced, outputs);
+}
+void set_packet_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& view) {
+    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.bounds, view, kd_u32(0),
+                    kd_u32(0), b.traced);
+}
+
 /// The launch of `rows` image rows from `first_row`, in tiles.
 void enqueue_rows(ClDevice& device, cl::Kernel& kernel, std::size_t width, std::size_t first_row,
                   std::size_t rows) {
@@ -98,8 +117,8 @@ void enqueue_packets(ClDevice& device, cl::Kernel& kernel, const KdView& view,
                      std::size_t first_row, std::size_t rows) {
     kernel.setArg(5, kd_u32(first_row));
     kernel.setArg(6, kd_u32(rows));
-    const std::size_t tiles_x = (view.width + kPacketTile - 1) / kPacketTile;
-    const std::size_t tiles_y = (rows + kPacketTile - 1) / kPacketTile;
+    const std::size_t tiles_x = (view.width + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
+    const std::size_t tiles_y = (rows + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
     device.queue().enqueueNDRangeKernel(
         kernel, cl::NullRange,
         cl::NDRange(round_up(tiles_x, kPacketGroup), tiles_y, kd_primary_rays_per_pixel(&view)),
@@ -110,25 +129,20 @@ void enqueue_packets(ClDevice& device, cl::Kernel& kernel, const KdView& view,
 
 void prepare_opencl_renderer(ClDevice& device, kd_u32 effects, kd_u32 intersect,
                              RenderInputs::Packets packets) {
-    RenderInputs inputs;
-    inputs.intersect = intersect;
-    inputs.packets = packets;
     cl::Kernel kernel = render_kernel(device, effects, intersect, "kd_render_pixels");
     // One tile over an image of width 0: every work-item returns at once, but the device
     // compiles the kernel for the tile size it will run with.
-    KdView view{};
+    const KdView view{};
     with_cl_context("preparing the render kernel on " + device.info().name, [&] {
-        cl::Buffer dummy = device.allocate(sizeof(KdHit), "render kernel warm-up buffer");
-        for (cl_uint arg = 0; arg < 15; ++arg)
-            if (arg != 7 && arg != 8 && arg != 9) kernel.setArg(arg, dummy);
-        kernel.setArg(7, sizeof(KdView), &view);
-        kernel.setArg(15, kd_u32(0));
+        const cl::Buffer dummy = device.allocate(sizeof(KdHit), "render kernel warm-up buffer");
+        const RenderBuffers buffers{dummy, dummy, dummy, dummy, dummy, dummy,
+                                    dummy, dummy, dummy, dummy, dummy, dummy};
+        set_pixel_args(kernel, buffers, view, 0);
         enqueue_rows(device, kernel, 1, 0, 1);
-        if (use_packets(device, inputs)) {
+        if (use_packets(device, intersect, packets)) {
             cl::Kernel packet =
                 render_kernel(device, effects, intersect, "kd_trace_camera_packets");
-            for (cl_uint arg : {0, 1, 2, 3, 7}) packet.setArg(arg, dummy);
-            packet.setArg(4, sizeof(KdView), &view);
+            set_packet_args(packet, buffers, view);
             enqueue_packets(device, packet, view, 0, 1);
         }
         device.queue().finish();
@@ -139,57 +153,49 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
                           const RenderInputs& inputs, const DeviceTree* on_device) {
     const KdView& view = inputs.view;
     const std::size_t pixels = std::size_t(view.width) * view.height;
-    const bool packets = use_packets(device, inputs);
+    const bool packets = use_packets(device, inputs.intersect, inputs.packets);
     cl::Kernel kernel =
         render_kernel(device, inputs.effects.bits(), inputs.intersect, "kd_render_pixels");
 
-    std::vector<float> bounds = {tree.bounds.lo.x, tree.bounds.lo.y, tree.bounds.lo.z,
-                                 tree.bounds.hi.x, tree.bounds.hi.y, tree.bounds.hi.z};
+    const std::vector<float> bounds = {tree.bounds.lo.x, tree.bounds.lo.y, tree.bounds.lo.z,
+                                       tree.bounds.hi.x, tree.bounds.hi.y, tree.bounds.hi.z};
     // The builder's buffers where it hands them over (a copy each way less per frame: 12 MB for
     // the BART Kitchen, over PCIe on a GPU), else the host's arrays uploaded.
     const bool built_here =
         on_device && on_device->nodes() && on_device->leaf_indices() && on_device->triangles();
-    cl::Buffer nodes = built_here ? on_device->nodes : upload(device, tree.nodes, "kd-tree nodes");
-    cl::Buffer leaf_indices = built_here
-                                  ? on_device->leaf_indices
-                                  : upload(device, tree.leaf_indices, "leaf triangle indices");
-    cl::Buffer triangles =
-        built_here ? on_device->triangles : upload(device, scene.triangles, "triangles");
-    cl::Buffer material_ids = upload(device, scene.material_ids, "material ids");
-    cl::Buffer materials = upload(device, inputs.materials, "materials");
-    cl::Buffer lights = upload(device, inputs.lights, "lights");
-    cl::Buffer bounds_buffer = upload(device, bounds, "scene bounds");
-    cl::Buffer rgb = device.allocate(pixels * 3 * sizeof(float), "image");
-    cl::Buffer hits = device.allocate(pixels * sizeof(KdHit), "hit buffer");
     // Normals only for the AOV; per-pixel ray counts only from a kernel with effects (without
     // any, every pixel casts its primary rays and nothing else).
     const bool count_rays = inputs.effects.bits() != 0;
-    cl::Buffer normals =
-        device.allocate(inputs.normals ? pixels * 3 * sizeof(float) : 1, "normal buffer");
-    cl::Buffer counts =
-        device.allocate(count_rays ? pixels * sizeof(KdRayCounts) : 1, "ray counts");
-
     const std::size_t step = rows_per_launch(view, packets);
+    RenderBuffers b;
+    b.nodes = built_here ? on_device->nodes : upload(device, tree.nodes, "kd-tree nodes");
+    b.leaf_indices = built_here ? on_device->leaf_indices
+                                : upload(device, tree.leaf_indices, "leaf triangle indices");
+    b.triangles = built_here ? on_device->triangles : upload(device, scene.triangles, "triangles");
+    b.material_ids = upload(device, scene.material_ids, "material ids");
+    b.materials = upload(device, inputs.materials, "materials");
+    b.lights = upload(device, inputs.lights, "lights");
+    b.bounds = upload(device, bounds, "scene bounds");
+    b.rgb = device.allocate(pixels * 3 * sizeof(float), "image");
+    b.hits = device.allocate(pixels * sizeof(KdHit), "hit buffer");
+    b.normals = device.allocate(inputs.normals ? pixels * 3 * sizeof(float) : 1, "normal buffer");
+    b.counts = device.allocate(count_rays ? pixels * sizeof(KdRayCounts) : 1, "ray counts");
     // The primary hits of one launch's rows (all of its pixels' primary rays), when packets trace
     // them; in-order queue, so one buffer serves every launch.
-    cl::Buffer traced = device.allocate(
+    b.traced = device.allocate(
         packets ? step * view.width * kd_primary_rays_per_pixel(&view) * sizeof(KdHit)
                 : sizeof(KdHit),
         "primary hit buffer");
     cl::Kernel packet;
     with_cl_context("rendering a frame on " + device.info().name, [&] {
-        // first_row and rows (0 here) are set per launch.
         if (packets) {
             packet = render_kernel(device, inputs.effects.bits(), inputs.intersect,
                                    "kd_trace_camera_packets");
-            set_kernel_args(packet, nodes, leaf_indices, triangles, bounds_buffer, view, kd_u32(0),
-                            kd_u32(0), traced);
+            set_packet_args(packet, b, view);
         }
-        const kd_u32 outputs = (packets ? KDRAY_RENDER_TRACED_PRIMARY : 0u) |
-                               (inputs.normals ? KDRAY_RENDER_NORMALS : 0u);
-        set_kernel_args(kernel, nodes, leaf_indices, triangles, material_ids, materials, lights,
-                        bounds_buffer, view, kd_u32(0), kd_u32(0), rgb, hits, normals, counts,
-                        traced, outputs);
+        set_pixel_args(kernel, b, view,
+                       (packets ? KDRAY_RENDER_TRACED_PRIMARY : 0u) |
+                           (inputs.normals ? KDRAY_RENDER_NORMALS : 0u));
         for (std::size_t row = 0; row < view.height; row += step) {
             const std::size_t rows = std::min<std::size_t>(step, view.height - row);
             if (packets) enqueue_packets(device, packet, view, row, rows);
@@ -206,13 +212,13 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
     std::vector<KdRayCounts> pixel_counts(count_rays ? pixels : 0);
     with_cl_context("reading back a frame", [&] {
         cl::CommandQueue& q = device.queue();
-        q.enqueueReadBuffer(rgb, CL_FALSE, 0, pixels * 3 * sizeof(float), frame.image.rgb.data());
-        q.enqueueReadBuffer(hits, CL_FALSE, 0, pixels * sizeof(KdHit), frame.hits.hits.data());
+        q.enqueueReadBuffer(b.rgb, CL_FALSE, 0, pixels * 3 * sizeof(float), frame.image.rgb.data());
+        q.enqueueReadBuffer(b.hits, CL_FALSE, 0, pixels * sizeof(KdHit), frame.hits.hits.data());
         if (inputs.normals)
-            q.enqueueReadBuffer(normals, CL_FALSE, 0, pixels * 3 * sizeof(float),
+            q.enqueueReadBuffer(b.normals, CL_FALSE, 0, pixels * 3 * sizeof(float),
                                 normal_floats.data());
         if (count_rays)
-            q.enqueueReadBuffer(counts, CL_FALSE, 0, pixels * sizeof(KdRayCounts),
+            q.enqueueReadBuffer(b.counts, CL_FALSE, 0, pixels * sizeof(KdRayCounts),
                                 pixel_counts.data());
         q.finish();
     });

@@ -136,6 +136,11 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_RENDER_TRACED_PRIMARY 1u
 #define KDRAY_RENDER_NORMALS 2u
 
+/* kd_trace_camera_packets traces the primary rays of tiles of KDRAY_PACKET_TILE x
+ * KDRAY_PACKET_TILE pixels, one work-item each, as one packet: the 16 lanes of a float16. */
+#define KDRAY_PACKET_TILE 4
+#define KDRAY_PACKET_SIZE (KDRAY_PACKET_TILE * KDRAY_PACKET_TILE)
+
 /* KdMaterial flags. */
 #define KDRAY_MATERIAL_MIRROR 1u     /* ideal mirror reflection weighted by specular (illum 3, 5) */
 #define KDRAY_MATERIAL_DIELECTRIC 2u /* Fresnel reflection + refraction, see transmit_fraction */

@@ -21,7 +21,9 @@
 
 #include "core/kd_traverse.h"
 
-#define KDRAY_PACKET_SIZE 16
+#if KDRAY_PACKET_SIZE != 16
+#error "packets are the 16 lanes of a float16 (core/kd_shared.h, KDRAY_PACKET_TILE)"
+#endif
 
 /* Per-lane constants of the walk and of the watertight test (KdRayPrecomp, one lane per ray). */
 typedef struct KdPacket {

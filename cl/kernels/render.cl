@@ -10,9 +10,6 @@
 #include "cl/kernels/packet_traverse.cl"
 #include "core/kd_render.h"
 
-/* Pixels per packet: a 4x4 tile (KDRAY_PACKET_SIZE lanes). */
-#define KDRAY_PACKET_TILE 4
-
 /* The scene view both kernels read. */
 inline KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
                                  __global const float* triangles,
