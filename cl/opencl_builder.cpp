@@ -191,8 +191,9 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
         DeviceArray cut_code = b.allocate(std::size_t(nodes) * kMaxCuts * 4, "empty-space cuts");
         DeviceArray cut_pos = b.allocate(std::size_t(nodes) * kMaxCuts * 4, "empty-space planes");
         const unsigned bins = unsigned(b.params.large_split_bins);
+        // With the spatial median no kernel reads the bins; the argument still needs a buffer.
         DeviceArray chunk_bins =
-            b.allocate(std::size_t(chunks) * 6 * std::max(1u, bins) * 4, "large node SAH bins");
+            b.allocate(bins > 0 ? std::size_t(chunks) * 6 * bins * 4 : 4, "large node SAH bins");
         if (bins > 0 && !force_leaf)
             enqueue_kernel(q, k.bin_large, chunks, ref_box.buffer(), node_start.buffer(),
                            node_count.buffer(), node_chunk.buffer(), nodes, chunks,
@@ -292,8 +293,22 @@ void run_large_stage(Build& b, const Aabb& bounds, int max_depth, cl_uint thresh
 
 using namespace build_detail;
 
+namespace {
+
+/// The parameters a build uses: `params` with each bounded to what the builder supports (the
+/// depth that sizes the traversal stack, the masks' 64 bits, the bins' private arrays).
+BuildParams supported_params(const BuildParams& params) {
+    BuildParams p = params;
+    p.max_depth = std::clamp(params.max_depth, 0, KDRAY_MAX_DEPTH);
+    p.large_node_threshold = std::clamp(params.large_node_threshold, 1, 64);
+    p.large_split_bins = std::clamp(params.large_split_bins, 0, kMaxLargeSplitBins);
+    return p;
+}
+
+}  // namespace
+
 void prepare_opencl_builder(ClDevice& device, const BuildParams& params) {
-    const Kernels kernels(device, std::clamp(params.large_split_bins, 0, kMaxLargeSplitBins));
+    const Kernels kernels(device, supported_params(params).large_split_bins);
     const ClPrimitives primitives(device);
 }
 
@@ -309,10 +324,7 @@ KdTree detail::build_opencl_with_subtree_budget(ClDevice& device, const Scene& s
     const auto start = std::chrono::steady_clock::now();
     KdTree tree;
     tree.bounds = scene.bounds();
-    tree.params = params;
-    tree.params.max_depth = std::clamp(params.max_depth, 0, KDRAY_MAX_DEPTH);
-    tree.params.large_node_threshold = std::clamp(params.large_node_threshold, 1, 64);
-    tree.params.large_split_bins = std::clamp(params.large_split_bins, 0, kMaxLargeSplitBins);
+    tree.params = supported_params(params);
     tree.builder = "opencl";
     if (report) *report = BuildReport{};
     const std::size_t n = scene.triangle_count();

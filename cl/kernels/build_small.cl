@@ -26,6 +26,20 @@
  * Robots 13% of SAH (reference builder forced to that choice: 553.8 -> 623.8). */
 #include "cl/kernels/build_common.cl"
 
+/* The six split candidates of a reference's box (6 floats, lo.xyz hi.xyz) in the lanes of one
+ * float8: lane k = 2 * axis + side is the box's lo (side 0) or hi (side 1) on that axis; lanes 6
+ * and 7 are 0. */
+inline float8 kd_candidate_lanes(__global const float* b) {
+    return (float8)(b[0], b[3], b[1], b[4], b[2], b[5], 0.0f, 0.0f);
+}
+
+/* A box's bounds beside those lanes: *lo and *hi hold, in lane 2 * axis + side, its lo and hi on
+ * that axis (lanes 6 and 7: 0). */
+inline void kd_box_lanes(KdBox box, float8* lo, float8* hi) {
+    *lo = (float8)(box.lo.x, box.lo.x, box.lo.y, box.lo.y, box.lo.z, box.lo.z, 0.0f, 0.0f);
+    *hi = (float8)(box.hi.x, box.hi.x, box.hi.y, box.hi.y, box.hi.z, box.hi.z, 0.0f, 0.0f);
+}
+
 /* The lanes (of a reference's six candidates, lane 2 * axis + side at pos) whose planar triangles
  * go above: the hi lanes of the axes on which the reference is flat (lo and hi at one plane). */
 inline int8 kd_planar_above_lanes(float8 pos) {
@@ -49,17 +63,14 @@ __kernel void kd_compute_split_masks(uint refs, __global const float* ref_box,
                                      __global ulong* side_masks) {
     const uint ref = get_global_id(0);
     if (ref >= refs) return;
-    __global const float* own = ref_box + (size_t)ref * 6;
-    /* Lane k = 2 * axis + side: candidate k, at lo (side 0) or hi (side 1) on the axis. */
-    const float8 pos = (float8)(own[0], own[3], own[1], own[4], own[2], own[5], 0.0f, 0.0f);
+    const float8 pos = kd_candidate_lanes(ref_box + (size_t)ref * 6);
     const int8 planar_above = kd_planar_above_lanes(pos);
     const uint root = ref_root[ref];
     const uint start = root_ref_start[root], count = root_ref_count[root];
     ulong8 below = (ulong8)(0), above = (ulong8)(0);
     for (uint j = 0; j < count; ++j) {
-        __global const float* b = ref_box + (size_t)(start + j) * 6;
-        const float8 lo = (float8)(b[0], b[0], b[1], b[1], b[2], b[2], 0.0f, 0.0f);
-        const float8 hi = (float8)(b[3], b[3], b[4], b[4], b[5], b[5], 0.0f, 0.0f);
+        float8 lo, hi;
+        kd_box_lanes(kd_load_box(ref_box, start + j), &lo, &hi);
         const int8 crosses_up = hi > pos; /* -1 where true */
         const int8 is_above = crosses_up | (planar_above & (lo >= pos));
         const int8 is_below = (lo < pos) | (~planar_above & ~crosses_up);
@@ -114,8 +125,8 @@ inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global cons
      * of CPU per kitchen build (perf), this one 115 ms. */
     const float cost_scale = cost_intersection * 2.0f / kd_box_area(box);
     const float3 e = box.hi - box.lo;
-    const float8 lo = (float8)(box.lo.x, box.lo.x, box.lo.y, box.lo.y, box.lo.z, box.lo.z, 0, 0);
-    const float8 hi = (float8)(box.hi.x, box.hi.x, box.hi.y, box.hi.y, box.hi.z, box.hi.z, 0, 0);
+    float8 lo, hi;
+    kd_box_lanes(box, &lo, &hi);
     const float8 cross =
         (float8)(e.y * e.z, e.y * e.z, e.z * e.x, e.z * e.x, e.x * e.y, e.x * e.y, 0, 0);
     const float8 ring = (float8)(e.y + e.z, e.y + e.z, e.z + e.x, e.z + e.x, e.x + e.y, e.x + e.y,
@@ -127,8 +138,7 @@ inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global cons
     uint8 lane_candidate = (uint8)(KDRAY_NO_CANDIDATE);
     for (ulong rest = mask; rest != 0; rest &= rest - 1) {
         const uint ref = start + (uint)popcount((rest & (0ul - rest)) - 1ul); /* lowest set bit */
-        __global const float* b = ref_box + (size_t)ref * 6;
-        const float8 pos = (float8)(b[0], b[3], b[1], b[4], b[2], b[5], 0, 0);
+        const float8 pos = kd_candidate_lanes(ref_box + (size_t)ref * 6);
         ulong8 below, above;
         long8 valid;
         kd_candidate_children(node, vload8(0, side_masks + (size_t)ref * 16),
@@ -169,7 +179,8 @@ inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global cons
  * of the normal, which a sliver or a collapsed triangle makes as large as the normal itself. */
 inline int kd_plane_misses_box(__global const float* tri, KdBox box) {
     const float3 a = (float3)(tri[0], tri[1], tri[2]);
-    const float3 e1 = (float3)(tri[3], tri[4], tri[5]) - a, e2 = (float3)(tri[6], tri[7], tri[8]) - a;
+    const float3 e1 = (float3)(tri[3], tri[4], tri[5]) - a;
+    const float3 e2 = (float3)(tri[6], tri[7], tri[8]) - a;
     const float3 n = cross(e1, e2);
     const float3 centre = 0.5f * (box.lo + box.hi), half_extent = 0.5f * (box.hi - box.lo);
     const float3 to_centre = centre - a;
@@ -178,7 +189,8 @@ inline int kd_plane_misses_box(__global const float* tri, KdBox box) {
      * the lever arm. */
     const float reach = fabs(to_centre.x) + fabs(to_centre.y) + fabs(to_centre.z) +
                         half_extent.x + half_extent.y + half_extent.z;
-    const float slack = 1e-5f * (fabs(distance) + radius) + 1e-4f * length(e1) * length(e2) * reach;
+    const float slack =
+        1e-5f * (fabs(distance) + radius) + 1e-4f * length(e1) * length(e2) * reach;
     return fabs(distance) > radius + slack;
 }
 
@@ -271,16 +283,13 @@ __kernel void kd_build_small_subtrees(
         const float split = b[(k % 2) * 3 + axis];
         ulong children[2][8];
         {
-            const float8 pos = (float8)(b[0], b[3], b[1], b[4], b[2], b[5], 0, 0);
-            const KdBox nb = node.box;
+            float8 lo, hi;
+            kd_box_lanes(node.box, &lo, &hi);
             ulong8 below, above;
             long8 valid;
-            kd_candidate_children(
-                (ulong8)(node.mask), vload8(0, side_masks + (size_t)ref * 16),
-                vload8(1, side_masks + (size_t)ref * 16), pos,
-                (float8)(nb.lo.x, nb.lo.x, nb.lo.y, nb.lo.y, nb.lo.z, nb.lo.z, 0, 0),
-                (float8)(nb.hi.x, nb.hi.x, nb.hi.y, nb.hi.y, nb.hi.z, nb.hi.z, 0, 0), &below,
-                &above, &valid);
+            kd_candidate_children((ulong8)(node.mask), vload8(0, side_masks + (size_t)ref * 16),
+                                  vload8(1, side_masks + (size_t)ref * 16), kd_candidate_lanes(b),
+                                  lo, hi, &below, &above, &valid);
             vstore8(below, 0, children[0]);
             vstore8(above, 0, children[1]);
         }
