@@ -49,6 +49,17 @@ bool use_packets(const ClDevice& device, kd_u32 intersect, RenderInputs::Packets
     return device.info().type == "CPU";
 }
 
+/// The per-pixel kernel of a frame. kd_shade_traced_pixels when the packets traced its only
+/// primary ray and no ray follows from a hit but shadow rays: without the pending-ray stack and
+/// the primary walk, PoCL compiles it to half kd_render_pixels' time per pixel (BART Kitchen,
+/// 1024x768 headlight: 28 -> 15 ms).
+const char* pixel_kernel_name(const RenderInputs& inputs, bool packets) {
+    const bool one_ray_tree =
+        (inputs.effects.bits() & (KDRAY_EFFECT_REFLECTION | KDRAY_EFFECT_REFRACTION)) == 0u;
+    return packets && inputs.view.spp == 1u && one_ray_tree ? "kd_shade_traced_pixels"
+                                                            : "kd_render_pixels";
+}
+
 /// Pixels of a work-group. Square tiles keep neighbouring rays, and their paths through the tree,
 /// together, which is what a GPU's SIMD lanes want. On PoCL (which runs a work-group as a loop
 /// over its work-items) the shape made no measurable difference: process CPU time per frame for
@@ -127,9 +138,11 @@ void enqueue_packets(ClDevice& device, cl::Kernel& kernel, const KdView& view,
 
 }  // namespace
 
-void prepare_opencl_renderer(ClDevice& device, kd_u32 effects, kd_u32 intersect,
-                             RenderInputs::Packets packets) {
-    cl::Kernel kernel = render_kernel(device, effects, intersect, "kd_render_pixels");
+void prepare_opencl_renderer(ClDevice& device, const RenderInputs& inputs) {
+    const kd_u32 effects = inputs.effects.bits(), intersect = inputs.intersect;
+    const bool packets = use_packets(device, intersect, inputs.packets);
+    cl::Kernel kernel =
+        render_kernel(device, effects, intersect, pixel_kernel_name(inputs, packets));
     // One tile over an image of width 0: every work-item returns at once, but the device
     // compiles the kernel for the tile size it will run with.
     const KdView view{};
@@ -139,7 +152,7 @@ void prepare_opencl_renderer(ClDevice& device, kd_u32 effects, kd_u32 intersect,
                                     dummy, dummy, dummy, dummy, dummy, dummy};
         set_pixel_args(kernel, buffers, view, 0);
         enqueue_rows(device, kernel, 1, 0, 1);
-        if (use_packets(device, intersect, packets)) {
+        if (packets) {
             cl::Kernel packet =
                 render_kernel(device, effects, intersect, "kd_trace_camera_packets");
             set_packet_args(packet, buffers, view);
@@ -154,8 +167,8 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
     const KdView& view = inputs.view;
     const std::size_t pixels = std::size_t(view.width) * view.height;
     const bool packets = use_packets(device, inputs.intersect, inputs.packets);
-    cl::Kernel kernel =
-        render_kernel(device, inputs.effects.bits(), inputs.intersect, "kd_render_pixels");
+    cl::Kernel kernel = render_kernel(device, inputs.effects.bits(), inputs.intersect,
+                                      pixel_kernel_name(inputs, packets));
 
     const std::vector<float> bounds = {tree.bounds.lo.x, tree.bounds.lo.y, tree.bounds.lo.z,
                                        tree.bounds.hi.x, tree.bounds.hi.y, tree.bounds.hi.z};

@@ -85,9 +85,7 @@ nlohmann::json render_frame(RenderRun& run, std::size_t i, const Scene& scene, d
     RenderInputs render_inputs = prepare_render(scene, run.settings, camera, kd_u32(i));
     set_trace_options(command, render_inputs);
     // The render program of this frame's effects is built (once per run) outside trace_ms.
-    if (command.tracer == "opencl")
-        prepare_opencl_renderer(run.session.device(), render_inputs.effects.bits(),
-                                render_inputs.intersect, render_inputs.packets);
+    if (command.tracer == "opencl") prepare_opencl_renderer(run.session.device(), render_inputs);
     auto trace_start = Clock::now();
     FrameResult result = command.tracer == "opencl"
                              ? render_opencl(run.session.device(), built.tree, scene, render_inputs,

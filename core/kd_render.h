@@ -83,7 +83,7 @@ KDRAY_INLINE void kd_normalize3(kd_f32* a) {
 
 /* The ray through image position (px, py) in pixels, conventions.md's camera model, evaluated in
  * the same order as ../shared/peers/embree: d = normalize(f + (r * sx + u * sy)). */
-KDRAY_INLINE KdRay kd_camera_ray(const KdView* view, kd_f32 px, kd_f32 py) {
+KDRAY_HOT_INLINE KdRay kd_camera_ray(const KdView* view, kd_f32 px, kd_f32 py) {
     const kd_f32 sx = (2.0f * px / (kd_f32)view->width - 1.0f) * view->tan_half_fov * view->aspect;
     const kd_f32 sy = (1.0f - 2.0f * py / (kd_f32)view->height) * view->tan_half_fov;
     KdRay ray;
@@ -100,7 +100,7 @@ KDRAY_INLINE KdRay kd_camera_ray(const KdView* view, kd_f32 px, kd_f32 py) {
 /* x^y for x > 0, as 2^(y log2 x) on both sides: OpenCL's pow in PoCL (an extended-precision
  * exp and log) took 17% of a BART Kitchen frame's CPU time (perf, primary rays with a headlight),
  * exp2 and log2 a fraction of it; the highlight needs no more than float accuracy. */
-KDRAY_INLINE kd_f32 kd_pow_positive(kd_f32 x, kd_f32 y) {
+KDRAY_HOT_INLINE kd_f32 kd_pow_positive(kd_f32 x, kd_f32 y) {
     return KDRAY_EXP2(y * KDRAY_LOG2(x));
 }
 
@@ -117,7 +117,8 @@ KDRAY_INLINE kd_f32 kd_unit_float(kd_u32 h) {
 }
 
 /* Geometric unit normal of a triangle, facing against `dir`. */
-KDRAY_INLINE void kd_facing_normal(KDRAY_GLOBAL const kd_f32* tri, const kd_f32* dir, kd_f32* n) {
+KDRAY_HOT_INLINE void kd_facing_normal(KDRAY_GLOBAL const kd_f32* tri, const kd_f32* dir,
+                                       kd_f32* n) {
     const kd_f32 e1[3] = {tri[3] - tri[0], tri[4] - tri[1], tri[5] - tri[2]};
     const kd_f32 e2[3] = {tri[6] - tri[0], tri[7] - tri[1], tri[8] - tri[2]};
     kd_set3(n, e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
@@ -165,15 +166,19 @@ KDRAY_INLINE KdPendingRay kd_pending(const kd_f32* org, const kd_f32* dir, const
 }
 
 /* Direct light at p (normal n, facing the viewer) for the eye direction `dir`: diffuse and
- * highlight under every light, each behind a shadow ray when shadows are on. */
-KDRAY_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
-                                  KDRAY_GLOBAL const KdMaterial* m, const kd_f32* p,
-                                  const kd_f32* n, const kd_f32* dir, kd_f32* out,
-                                  KdRayCounts* rays) {
-    const kd_u32 lights = view->light_count == 0u ? 1u : view->light_count;
+ * highlight under every light, each behind a shadow ray; with shadows off, under the headlight. */
+KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
+                                      KDRAY_GLOBAL const KdMaterial* m, const kd_f32* p,
+                                      const kd_f32* n, const kd_f32* dir, kd_f32* out,
+                                      KdRayCounts* rays) {
+    /* Shadows are on exactly when the render file has lights (decide_effects), so a kernel
+     * without them knows at compile time that its one light is the headlight: a loop of one
+     * trip, unrolled (PoCL, BART Kitchen headlight frame: trace 43 -> 37 ms). */
+    const kd_u32 light_count = KDRAY_EFFECT_ON(view, KDRAY_EFFECT_SHADOWS) ? view->light_count : 0u;
+    const kd_u32 lights = light_count == 0u ? 1u : light_count;
     for (kd_u32 i = 0; i < lights; ++i) {
         kd_f32 to_light[3], irradiance[3], distance = KDRAY_INF;
-        if (view->light_count == 0u) {
+        if (light_count == 0u) {
             /* No lights in the render file: a headlight, which casts no visible shadow. */
             kd_set3(to_light, -view->forward[0], -view->forward[1], -view->forward[2]);
             kd_set3(irradiance, 1.0f, 1.0f, 1.0f);
@@ -194,7 +199,7 @@ KDRAY_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
         }
         const kd_f32 cos_l = kd_dot3(n, to_light);
         if (cos_l <= 0.0f) continue;
-        if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_SHADOWS) && view->light_count != 0u) {
+        if (light_count != 0u) {
             KdRay shadow;
             for (int a = 0; a < 3; ++a) {
                 shadow.org[a] = p[a] + n[a] * view->ray_epsilon;
@@ -255,9 +260,9 @@ KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdV
  * hit is `traced` when it was traced already (by the packet kernel), else it is traced here. The
  * pending stack holds at most one ray per level: each traced ray pushes at most two, one of
  * which is traced next. */
-KDRAY_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* view, KdRay primary,
-                                  const KdHit* traced, kd_f32* rgb, KdRayCounts* rays,
-                                  KdHit* first_hit, kd_f32* first_normal) {
+KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* view, KdRay primary,
+                                      const KdHit* traced, kd_f32* rgb, KdRayCounts* rays,
+                                      KdHit* first_hit, kd_f32* first_normal) {
     if (!KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFLECTION | KDRAY_EFFECT_REFRACTION)) {
         kd_trace_direct_sample(scene, view, primary, traced, rgb, rays, first_hit, first_normal);
         return;
@@ -354,7 +359,7 @@ KDRAY_INLINE kd_u32 kd_primary_rays_per_pixel(const KdView* view) {
 
 /* Primary ray `r` (< kd_primary_rays_per_pixel) of pixel (x, y): sample r, or the centre ray for
  * r == spp. */
-KDRAY_INLINE KdRay kd_primary_ray(const KdView* view, kd_u32 x, kd_u32 y, kd_u32 r) {
+KDRAY_HOT_INLINE KdRay kd_primary_ray(const KdView* view, kd_u32 x, kd_u32 y, kd_u32 r) {
     if (view->spp <= 1u || r == view->spp)
         return kd_camera_ray(view, (kd_f32)x + 0.5f, (kd_f32)y + 0.5f);
     const kd_u32 h = kd_hash((y * view->width + x) * 0x9E3779B9u ^ kd_hash(r + view->seed));
@@ -364,9 +369,9 @@ KDRAY_INLINE KdRay kd_primary_ray(const KdView* view, kd_u32 x, kd_u32 y, kd_u32
 /* One pixel: spp samples, their mean colour, and the centre ray's hit for the AOV. `traced`,
  * when not 0, holds the hits of the pixel's primary rays, already traced: the hit of ray r at
  * traced[r * traced_stride]. */
-KDRAY_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView* view, kd_u32 x,
-                                     kd_u32 y, KDRAY_GLOBAL const KdHit* traced,
-                                     kd_u32 traced_stride) {
+KDRAY_HOT_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView* view, kd_u32 x,
+                                         kd_u32 y, KDRAY_GLOBAL const KdHit* traced,
+                                         kd_u32 traced_stride) {
     KdPixel out;
     kd_set3(out.rgb, 0.0f, 0.0f, 0.0f);
     out.rays.primary = out.rays.shadow = out.rays.reflection = out.rays.refraction = 0u;

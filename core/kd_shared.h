@@ -180,9 +180,10 @@ typedef struct KdLight {
 /* KdView — 112 bytes: the camera basis of conventions.md and the frame's render settings.
  *   origin, forward, right, up: camera position and unit basis; tan_half_fov = tan(fov_y / 2);
  *   aspect = width / height; background colour; spp samples per pixel; max_depth <=
- *   KDRAY_MAX_BOUNCES; light_count lights (0: a headlight along the view direction, no shadow
- *   rays); effects KDRAY_EFFECT_* bits; seed for the sample jitter; ray_epsilon: how far
- *   secondary rays start off the surface (scaled to the scene by the host); pad: 0. */
+ *   KDRAY_MAX_BOUNCES; light_count lights, which shine only with KDRAY_EFFECT_SHADOWS (without:
+ *   a headlight along the view direction, no shadow rays); effects KDRAY_EFFECT_* bits; seed for
+ * the sample jitter; ray_epsilon: how far secondary rays start off the surface (scaled to the scene
+ * by the host); pad: 0. */
 typedef struct KdView {
     kd_f32 origin[3];
     kd_f32 tan_half_fov;

@@ -166,9 +166,9 @@ TEST_CASE("opencl render: prepare_opencl_renderer builds the program that frames
     REQUIRE(inputs.effects.bits() == (KDRAY_EFFECT_SHADOWS | KDRAY_EFFECT_REFLECTION));
 
     const int before = program_build_count();
-    prepare_opencl_renderer(test::opencl_test_device(), inputs.effects.bits());
+    prepare_opencl_renderer(test::opencl_test_device(), inputs);
     CHECK(program_build_count() == before + 1);
-    prepare_opencl_renderer(test::opencl_test_device(), inputs.effects.bits());
+    prepare_opencl_renderer(test::opencl_test_device(), inputs);
     const KdTree tree = build_reference(scene);
     const FrameResult f = render_opencl(test::opencl_test_device(), tree, scene, inputs);
     CHECK(program_build_count() == before + 1);
@@ -201,6 +201,7 @@ void check_packets(const Scene& scene, const KdTree& tree, const RenderInputs& b
             differ += !same_bits(device.hits.hits[i], host.hits.hits[i]);
         CHECK(differ == 0);
         CHECK(device.rays.primary == host.rays.primary);
+        CHECK(device.rays.shadow == host.rays.shadow);
         CHECK(rgb_rmse(device.image, host.image) < 1e-4);
     }
 }
@@ -223,6 +224,17 @@ TEST_CASE("opencl render: packets of primary rays give the reference's hits bit 
         RenderSettings settings = small_settings(21, 14);
         settings.spp = 3;
         check_packets(scene, tree, prepare_render(scene, settings, skew_camera(scene), 7));
+    }
+    SUBCASE("a point light: shadow rays from the packets' hits") {
+        const Scene scene = test::random_triangles(2000, 43);
+        const KdTree tree = build_reference(scene);
+        RenderSettings settings = small_settings(23, 19);
+        const Aabb b = scene.bounds();
+        settings.lights.push_back(
+            Light{Light::Type::point, b.hi + (b.hi - b.lo) * 0.25f, {}, {40, 40, 40}});
+        const RenderInputs inputs = prepare_render(scene, settings, skew_camera(scene), 0);
+        REQUIRE(inputs.effects.bits() == KDRAY_EFFECT_SHADOWS);
+        check_packets(scene, tree, inputs);
     }
 }
 

@@ -6,7 +6,9 @@
  *   kd_trace_camera_packets  (CPU devices) the primary rays of 4x4 pixel tiles as packets of 16
  *                            (packet_traverse.cl), their hits into a buffer
  *   kd_render_pixels         one work-item per pixel: its samples, shaded; the primary hits come
- *                            from that buffer when there is one, else they are traced here */
+ *                            from that buffer when there is one, else they are traced here
+ *   kd_shade_traced_pixels   one work-item per pixel of one sample whose hit is in that buffer,
+ *                            shaded where no reflection or refraction follows */
 #include "cl/kernels/packet_traverse.cl"
 #include "core/kd_render.h"
 
@@ -122,5 +124,40 @@ __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u
     hits[i] = pixel.centre_hit;
 #if KDRAY_COMPILED_EFFECTS != 0
     ray_counts[i] = pixel.rays;
+#endif
+}
+
+/* kd_render_pixels for spp 1 with the primary hits traced, in a kernel without reflection and
+ * refraction: kd_render_pixel's one sample, its shading (kd_trace_direct_sample) and nothing else,
+ * no primary walk and no pending-ray stack. */
+__kernel void kd_shade_traced_pixels(
+    __global const KdNode* nodes, __global const kd_u32* leaf_indices,
+    __global const float* triangles, __global const kd_u32* material_ids,
+    __global const KdMaterial* materials, __global const KdLight* lights,
+    __global const float* bounds, const KdView view, const kd_u32 first_row, const kd_u32 rows,
+    __global float* rgb, __global KdHit* hits, __global float* normals,
+    __global KdRayCounts* ray_counts, __global const KdHit* traced, const kd_u32 outputs) {
+    const kd_u32 x = (kd_u32)get_global_id(0);
+    const kd_u32 row = (kd_u32)get_global_id(1);
+    if (x >= view.width || row >= rows) return;
+    const kd_u32 y = first_row + row;
+    const KdSceneView scene =
+        kd_scene_view(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds);
+    const KdView v = view;
+    const size_t in_launch = (size_t)row * view.width + x;
+    const KdHit hit = traced[in_launch];
+    KdHit centre;
+    float colour[3], normal[3];
+    KdRayCounts counts;
+    counts.primary = counts.shadow = counts.reflection = counts.refraction = 0u;
+    kd_trace_direct_sample(&scene, &v, kd_primary_ray(&v, x, y, 0u), &hit, colour, &counts, &centre,
+                           normal);
+    const size_t i = (size_t)y * view.width + x;
+    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = colour[c];
+    if (outputs & KDRAY_RENDER_NORMALS)
+        for (int c = 0; c < 3; ++c) normals[3 * i + c] = normal[c];
+    hits[i] = centre;
+#if KDRAY_COMPILED_EFFECTS != 0
+    ray_counts[i] = counts;
 #endif
 }
