@@ -25,6 +25,17 @@
 #error "packets are the 16 lanes of a float16 (core/kd_shared.h, KDRAY_PACKET_TILE)"
 #endif
 
+/* Whether any lane of a mask (each lane 0 or -1) is set. OpenCL's any() is, in PoCL, a chain of
+ * shuffles with a branch per step; a reduction of the lanes' sign bits compiles to a mask test. */
+#if defined(__clang__) && defined(__has_builtin)
+#if __has_builtin(__builtin_reduce_or)
+#define KDRAY_PACKET_ANY(m) (__builtin_reduce_or((m) < 0) != 0)
+#endif
+#endif
+#ifndef KDRAY_PACKET_ANY
+#define KDRAY_PACKET_ANY(m) any(m)
+#endif
+
 /* Per-lane constants of the walk and of the watertight test (KdRayPrecomp, one lane per ray). */
 typedef struct KdPacket {
     float16 org[3], dir[3], inv_dir[3];
@@ -70,7 +81,7 @@ KDRAY_HOT_INLINE void kd_packet_intersect(const KdPacket* p, __global const floa
     float16 w = bx * ay - by * ax;
 #ifdef KDRAY_HAS_DOUBLE
     const int16 zero = active & ((u == 0.0f) | (v == 0.0f) | (w == 0.0f));
-    if (any(zero)) {
+    if (KDRAY_PACKET_ANY(zero)) {
         const double16 dax = convert_double16(ax), day = convert_double16(ay);
         const double16 dbx = convert_double16(bx), dby = convert_double16(by);
         const double16 dcx = convert_double16(cx), dcy = convert_double16(cy);
@@ -83,13 +94,13 @@ KDRAY_HOT_INLINE void kd_packet_intersect(const KdPacket* p, __global const floa
         active & ~(((u < 0.0f) | (v < 0.0f) | (w < 0.0f)) & ((u > 0.0f) | (v > 0.0f) | (w > 0.0f)));
     const float16 det = u + v + w;
     ok &= det != 0.0f;
-    if (!any(ok)) return;
+    if (!KDRAY_PACKET_ANY(ok)) return;
     const float16 az = p->sz * a_z, bz = p->sz * b_z, cz = p->sz * c_z;
     const float16 t_scaled = u * az + v * bz + w * cz;
     const float16 sign = select((float16)(1.0f), (float16)(-1.0f), det < 0.0f);
     const float16 abs_det = det * sign, t_abs = t_scaled * sign;
     ok &= ~((t_abs < p->tmin * abs_det) | (t_abs >= best->t * abs_det));
-    if (!any(ok)) return;
+    if (!KDRAY_PACKET_ANY(ok)) return;
     const float16 inv_det = 1.0f / det;
     const float16 t = t_scaled * inv_det;
     ok &= ~((t < p->tmin) | (t >= best->t));
@@ -190,7 +201,7 @@ KDRAY_HOT_INLINE void kd_trace_packet(__global const KdNode* nodes,
     for (;;) {
         /* A lane stops where its best hit lies before the node (kd_trace's test). */
         active &= ~(best.t < tmin);
-        if (any(active)) {
+        if (KDRAY_PACKET_ANY(active)) {
             const KdNode node = nodes[node_index];
             if (!kd_node_is_leaf(node)) {
                 const uint axis = kd_node_axis(node);
@@ -220,14 +231,14 @@ KDRAY_HOT_INLINE void kd_trace_packet(__global const KdNode* nodes,
                 above.tmax = select(first_tmax, tmax, below_first);
                 /* Lanes that visit both children above first see below again after above. */
                 const int16 below_later = below.lanes & above.lanes & ~below_first;
-                if (any(below_later)) {
+                if (KDRAY_PACKET_ANY(below_later)) {
                     stack[top] = below;
                     stack[top].lanes = below_later;
                     ++top;
                 }
-                if (any(above.lanes)) stack[top++] = above;
+                if (KDRAY_PACKET_ANY(above.lanes)) stack[top++] = above;
                 below.lanes &= ~below_later;
-                if (any(below.lanes)) {
+                if (KDRAY_PACKET_ANY(below.lanes)) {
                     node_index = below.node;
                     active = below.lanes;
                     tmin = below.tmin;
