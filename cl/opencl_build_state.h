@@ -34,6 +34,17 @@ struct SmallRoots {
     DeviceArray box, depth, id;
 };
 
+/// Small roots whose split-candidate masks and node records the small stage holds at once: roots
+/// root_begin.. and their references ref_begin.. (a root's references are contiguous, and so are
+/// consecutive roots'). A batch's records stay until the output stage has moved them into place.
+struct SmallBatch {
+    cl_uint root_begin = 0, roots = 0, ref_begin = 0, refs = 0;
+    // [0] the first pass's records, budget_scale[0] * (n + 1) per root of n references; [1] the
+    // second's, for the subtrees that outgrew the first (empty when none did).
+    DeviceArray records[2];
+    cl_uint budget_scale[2] = {0, 0};
+};
+
 /// Everything one build holds on the device between its stages.
 struct Build {
     Build(ClDevice& d, const BuildParams& p, std::size_t triangle_count)
@@ -64,12 +75,12 @@ struct Build {
     // Small roots: their reference lists (triangle, clipped box, root) and their ranges.
     DeviceArray small_ref_tri, small_ref_box, small_ref_root, root_ref_start, root_ref_count;
     cl_uint small_refs = 0, small_roots = 0;
-    // The small roots' nodes, and the subtrees the small stage builds from them: records
-    // (budget_scale * (refs + 1) per root of refs references), node and leaf reference counts.
+    // The small roots' nodes, and the subtrees the small stage builds from them: node records
+    // per batch of roots, node and leaf reference counts per root.
     SmallRoots small_first;
-    // [0] the first pass's records, [1] the second's (only when a subtree outgrew the first).
-    DeviceArray subtree_nodes[2], subtree_node_count, subtree_leaf_refs;
-    cl_uint small_nodes = 0, budget_scale[2] = {0, 0};
+    std::vector<SmallBatch> small_batches;
+    DeviceArray subtree_node_count, subtree_leaf_refs;
+    cl_uint small_nodes = 0;
     int large_levels = 0, small_levels = 0;
 
     DeviceArray allocate(std::size_t bytes, const std::string& what) {
@@ -128,8 +139,9 @@ inline cl_uint checked_u32(std::uint64_t value, const char* what) {
     return static_cast<cl_uint>(value);
 }
 
-/* Small-node stage (§4.2): every small root's subtree (opencl_builder_small.cpp). */
-void run_small_stage(Build& b, int max_depth, cl_uint first_scale);
+/* Small-node stage (§4.2): every small root's subtree (opencl_builder_small.cpp), in batches of
+ * roots whose masks and first records take at most batch_bytes each. */
+void run_small_stage(Build& b, int max_depth, cl_uint first_scale, std::size_t batch_bytes);
 
 /* Output stage (§4.3): the preorder nodes; the leaf indices go to leaf_indices. */
 DeviceArray write_preorder(Build& b, DeviceArray& leaf_indices, cl_uint& leaf_index_count);

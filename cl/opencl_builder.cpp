@@ -46,13 +46,6 @@ constexpr unsigned kSlotKinds = kSlotChild + kMaxCuts + 1;
 // bounds memory on pathological input where every median plane cuts most triangles.
 constexpr std::size_t kReferenceBudgetPerTriangle = 4;
 
-// Records the small stage first sets aside per small root of n references: this times n + 1.
-// Subtrees average 2.8 nodes per reference on the kitchen and 5.2 on the bunny, and need a scale
-// of at most 7 and 10; the few that outgrow the first budget are built again in a second pass.
-// With 6, the bunny's second pass cost 20% of its build's CPU time (perf stat) and the kitchen's
-// peak device memory was higher (113 MB against 102: both passes' records at once).
-constexpr cl_uint kSubtreeBudgetScale = 10;
-
 std::string build_defines() {
     static const char* names[kSlotChild + 1] = {"LARGE",      "LARGE_REFS", "LARGE_CHUNKS", "SMALL",
                                                 "SMALL_REFS", "LEAF_REFS",  "CHILD"};
@@ -314,13 +307,12 @@ void prepare_opencl_builder(ClDevice& device, const BuildParams& params) {
 
 KdTree build_opencl(ClDevice& device, const Scene& scene, const BuildParams& params,
                     BuildReport* report, DeviceTree* on_device) {
-    return detail::build_opencl_with_subtree_budget(device, scene, params, kSubtreeBudgetScale,
-                                                    report, on_device);
+    return detail::build_opencl_with_limits(device, scene, params, {}, report, on_device);
 }
 
-KdTree detail::build_opencl_with_subtree_budget(ClDevice& device, const Scene& scene,
-                                                const BuildParams& params, unsigned scale,
-                                                BuildReport* report, DeviceTree* on_device) {
+KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
+                                        const BuildParams& params, const SmallStageLimits& limits,
+                                        BuildReport* report, DeviceTree* on_device) {
     const auto start = std::chrono::steady_clock::now();
     KdTree tree;
     tree.bounds = scene.bounds();
@@ -352,7 +344,8 @@ KdTree detail::build_opencl_with_subtree_budget(ClDevice& device, const Scene& s
     compute_triangle_boxes(b, scene, clock);
     run_large_stage(b, tree.bounds, tree.params.max_depth, threshold);
     clock.lap("large_nodes");
-    run_small_stage(b, tree.params.max_depth, std::max(1u, scale));
+    run_small_stage(b, tree.params.max_depth, std::max(1u, limits.subtree_budget_scale),
+                    limits.batch_bytes ? limits.batch_bytes : device.info().max_alloc_bytes);
     clock.lap("small_nodes");
     DeviceArray leaf_indices;
     cl_uint leaf_index_count = 0;

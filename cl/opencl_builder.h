@@ -6,6 +6,8 @@
 // counts that size the next launch.
 #pragma once
 
+#include <cstddef>
+
 #include <CL/opencl.hpp>
 
 #include "cl/device.h"
@@ -37,13 +39,24 @@ KdTree build_opencl(ClDevice& device, const Scene& scene, const BuildParams& par
                     BuildReport* report = nullptr, DeviceTree* on_device = nullptr);
 
 namespace detail {
-/// build_opencl with the small stage's first budget of node records given: `scale` * (n + 1)
-/// for a small root of n references (build_opencl uses 10). A subtree that outgrows it is built
-/// again in a second pass; tests pass 1 so that most subtrees take that path.
-KdTree build_opencl_with_subtree_budget(ClDevice& device, const Scene& scene,
-                                        const BuildParams& params, unsigned scale,
-                                        BuildReport* report = nullptr,
-                                        DeviceTree* on_device = nullptr);
+/// Limits of build_opencl's small stage, which tests set to reach its rarer paths.
+struct SmallStageLimits {
+    /// Node records first set aside per small root of n references: this times n + 1. Subtrees
+    /// average 2.8 nodes per reference on the BART Kitchen and 5.2 on the bunny, and need a
+    /// scale of at most 7 and 10; the few that outgrow the first budget are built again in a
+    /// second pass. With 6, the bunny's second pass cost 20% of its build's CPU time (perf stat)
+    /// and the kitchen's peak device memory was higher (113 MB against 102: both passes' records
+    /// at once). Tests pass 1 so that most subtrees take the second pass.
+    unsigned subtree_budget_scale = 10;
+    /// The most bytes of one batch's split-candidate masks, and of its first node records; 0:
+    /// the device's largest allocation. Tests pass a few kilobytes so that a small scene is
+    /// built in many batches.
+    std::size_t batch_bytes = 0;
+};
+
+KdTree build_opencl_with_limits(ClDevice& device, const Scene& scene, const BuildParams& params,
+                                const SmallStageLimits& limits, BuildReport* report = nullptr,
+                                DeviceTree* on_device = nullptr);
 }  // namespace detail
 
 }  // namespace kdray

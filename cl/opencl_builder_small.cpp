@@ -3,18 +3,71 @@
 // opencl_builder.cpp.
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cl/launch.h"
 #include "cl/opencl_build_state.h"
 
 namespace kdray::build_detail {
 
+namespace {
+
+// Bytes of split-candidate masks per small-root reference: 6 candidates below and 6 above, each
+// group padded to a ulong8.
+constexpr std::size_t kMaskBytesPerRef = 16 * 8;
+// Bytes of one small-stage node record (a uint4, build_common.cl).
+constexpr std::size_t kRecordBytes = 16;
+
+/// The small roots in batches whose masks and first records (first_scale * (n + 1) per root of n
+/// references) take at most batch_bytes each: one batch unless the scene is huge. Splitting
+/// needs the roots' reference counts, read back only then.
+std::vector<SmallBatch> small_batches(Build& b, cl_uint first_scale, std::size_t batch_bytes) {
+    auto fits = [&](std::size_t refs, std::size_t roots) {
+        return refs * kMaskBytesPerRef <= batch_bytes &&
+               first_scale * (refs + roots) * kRecordBytes <= batch_bytes;
+    };
+    std::vector<SmallBatch> batches;
+    if (fits(b.small_refs, b.small_roots)) {
+        batches.push_back(SmallBatch{0, b.small_roots, 0, b.small_refs});
+        return batches;
+    }
+    std::vector<cl_uint> counts(b.small_roots);
+    with_cl_context("reading the small roots' reference counts", [&] {
+        b.queue.enqueueReadBuffer(b.root_ref_count.buffer(), CL_TRUE, 0, counts.size() * 4,
+                                  counts.data());
+    });
+    SmallBatch batch;
+    for (cl_uint root = 0; root < b.small_roots; ++root) {
+        if (batch.roots > 0 && !fits(std::size_t(batch.refs) + counts[root], batch.roots + 1)) {
+            const cl_uint ref_end = batch.ref_begin + batch.refs;
+            batches.push_back(std::move(batch));
+            batch = SmallBatch{root, 0, ref_end, 0};
+        }
+        // A root holds at most 64 references, so a batch of one always fits a sane limit.
+        if (!fits(counts[root], 1))
+            throw Error("OpenCL kd-tree build: a small root's masks and records (" +
+                        std::to_string(counts[root] * kMaskBytesPerRef) +
+                        " bytes) exceed the batch limit of " + std::to_string(batch_bytes) +
+                        " bytes");
+        ++batch.roots;
+        batch.refs += counts[root];
+    }
+    batches.push_back(std::move(batch));
+    return batches;
+}
+
+}  // namespace
+
 /* Small-node stage (§4.2): split-candidate masks once, then every small root's subtree in one
  * launch (build_small.cl) instead of one launch, scan and read-back per level. Kitchen small_nodes
  * 153-199 -> 79 ms, bunny 112 -> 71 ms (median of 5 builds, same sitting, loaded 2-core machine);
- * CPU time (perf stat task-clock, 6 builds) kitchen 2912 -> 2380 ms, bunny 1903 -> 1465 ms. */
-void run_small_stage(Build& b, int max_depth, cl_uint first_scale) {
+ * CPU time (perf stat task-clock, 6 builds) kitchen 2912 -> 2380 ms, bunny 1903 -> 1465 ms.
+ * Both launches go by batch of roots when the masks (128 bytes per reference) or the records
+ * would outgrow one allocation; the batches' trees are the ones a single batch builds. */
+void run_small_stage(Build& b, int max_depth, cl_uint first_scale, std::size_t batch_bytes) {
     // The output stage reads the subtree counts even when there are no small roots.
     const std::size_t roots = std::max<cl_uint>(b.small_roots, 1);
     b.subtree_node_count = b.allocate(roots * 4, "subtree node counts");
@@ -22,46 +75,53 @@ void run_small_stage(Build& b, int max_depth, cl_uint first_scale) {
     if (b.small_roots == 0) return;
     cl::CommandQueue& q = b.queue;
     Kernels& k = b.kernels;
-    const std::size_t candidates = 6 * std::size_t(b.small_refs);
-    checked_u32(candidates, "split candidates");
-    // 16 masks per reference: 6 candidates below and 6 above, each padded to a ulong8.
-    DeviceArray side_masks = b.allocate(std::size_t(b.small_refs) * 16 * 8, "candidate masks");
-    enqueue_kernel(q, k.split_masks, b.small_refs, b.small_refs, b.small_ref_box.buffer(),
-                   b.small_ref_root.buffer(), b.root_ref_start.buffer(), b.root_ref_count.buffer(),
-                   side_masks.buffer());
+    checked_u32(6 * std::size_t(b.small_refs), "split candidates");
+    b.small_batches = small_batches(b, first_scale, batch_bytes);
 
-    /* Every subtree, into records set aside per root; the few subtrees that outgrow theirs are
-     * only counted, and built again into records sized by the largest (second pass). */
     DeviceArray totals = b.allocate(3 * 4, "small stage totals");
-    with_cl_context("clearing the small stage totals",
-                    [&] { q.enqueueFillBuffer(totals.buffer(), cl_uint(0), 0, 3 * 4); });
-    std::array<cl_uint, 3> total{};
-    auto build_subtrees = [&](cl_uint scale, cl_uint first_scale, const DeviceArray& records) {
-        enqueue_kernel(
-            q, k.build_subtrees, b.small_roots, b.small_roots, b.small_first.box.buffer(),
-            b.small_first.depth.buffer(), b.root_ref_start.buffer(), b.root_ref_count.buffer(),
-            b.small_ref_box.buffer(), side_masks.buffer(), b.small_ref_tri.buffer(),
-            b.triangle_data.buffer(), cl_float(b.params.costs.traversal),
-            cl_float(b.params.costs.intersection), cl_float(b.params.empty_bonus),
-            cl_uint(max_depth), scale, first_scale, records.buffer(), b.subtree_node_count.buffer(),
-            b.subtree_leaf_refs.buffer(), totals.buffer());
-    };
-    const std::size_t budget_units = std::size_t(b.small_refs) + b.small_roots;
-    b.budget_scale[0] = b.budget_scale[1] = first_scale;
-    b.subtree_nodes[0] = b.allocate(
-        checked_u32(first_scale * budget_units, "small node records") * 16, "small node records");
-    build_subtrees(first_scale, 0, b.subtree_nodes[0]);
-    with_cl_context("reading the small stage totals",
-                    [&] { q.enqueueReadBuffer(totals.buffer(), CL_TRUE, 0, 3 * 4, total.data()); });
-    if (total[1] > first_scale) {
-        b.budget_scale[1] = total[1];
-        b.subtree_nodes[1] =
-            b.allocate(checked_u32(std::size_t(total[1]) * budget_units, "small node records") * 16,
-                       "small node records (second pass)");
-        build_subtrees(total[1], first_scale, b.subtree_nodes[1]);
+    for (SmallBatch& batch : b.small_batches) {
+        DeviceArray side_masks =
+            b.allocate(std::size_t(batch.refs) * kMaskBytesPerRef, "candidate masks");
+        enqueue_kernel(q, k.split_masks, batch.refs, batch.ref_begin, batch.refs,
+                       b.small_ref_box.buffer(), b.small_ref_root.buffer(),
+                       b.root_ref_start.buffer(), b.root_ref_count.buffer(), side_masks.buffer());
+
+        /* Every subtree, into records set aside per root; the few subtrees that outgrow theirs
+         * are only counted, and built again into records sized by the largest (second pass). */
+        with_cl_context("clearing the small stage totals",
+                        [&] { q.enqueueFillBuffer(totals.buffer(), cl_uint(0), 0, 3 * 4); });
+        std::array<cl_uint, 3> total{};
+        auto build_subtrees = [&](cl_uint scale, cl_uint first_scale, const DeviceArray& records) {
+            enqueue_kernel(
+                q, k.build_subtrees, batch.roots, batch.root_begin, batch.roots, batch.ref_begin,
+                b.small_first.box.buffer(), b.small_first.depth.buffer(), b.root_ref_start.buffer(),
+                b.root_ref_count.buffer(), b.small_ref_box.buffer(), side_masks.buffer(),
+                b.small_ref_tri.buffer(), b.triangle_data.buffer(),
+                cl_float(b.params.costs.traversal), cl_float(b.params.costs.intersection),
+                cl_float(b.params.empty_bonus), cl_uint(max_depth), scale, first_scale,
+                records.buffer(), b.subtree_node_count.buffer(), b.subtree_leaf_refs.buffer(),
+                totals.buffer());
+        };
+        const std::size_t budget_units = std::size_t(batch.refs) + batch.roots;
+        batch.budget_scale[0] = batch.budget_scale[1] = first_scale;
+        batch.records[0] =
+            b.allocate(checked_u32(first_scale * budget_units, "small node records") * kRecordBytes,
+                       "small node records");
+        build_subtrees(first_scale, 0, batch.records[0]);
+        with_cl_context("reading the small stage totals", [&] {
+            q.enqueueReadBuffer(totals.buffer(), CL_TRUE, 0, 3 * 4, total.data());
+        });
+        if (total[1] > first_scale) {
+            batch.budget_scale[1] = total[1];
+            batch.records[1] =
+                b.allocate(checked_u32(std::size_t(total[1]) * budget_units, "small node records") *
+                               kRecordBytes,
+                           "small node records (second pass)");
+            build_subtrees(total[1], first_scale, batch.records[1]);
+        }
+        b.small_nodes = checked_u32(std::uint64_t(b.small_nodes) + total[0], "small nodes");
+        b.small_levels = std::max(b.small_levels, int(total[2]));
     }
-    b.small_nodes = total[0];
-    b.small_levels = int(total[2]);
 }
 
 /* Output stage (§4.3): subtree sizes bottom-up, preorder positions top-down, then the nodes. */
@@ -97,12 +157,15 @@ DeviceArray write_preorder(Build& b, DeviceArray& leaf_indices, cl_uint& leaf_in
     enqueue_kernel(q, k.write_nodes, records, cl_uint(records), b.records.buffer(),
                    position.buffer(), leaf_position.buffer(), b.leaf_store.buffer(), nodes.buffer(),
                    leaf_indices.buffer());
-    const cl::Buffer& second = b.subtree_nodes[b.subtree_nodes[1].bytes() ? 1 : 0].buffer();
-    enqueue_kernel(q, k.write_small, b.small_roots, b.small_roots, b.small_first.id.buffer(),
-                   b.root_ref_start.buffer(), b.root_ref_count.buffer(), b.budget_scale[0],
-                   b.subtree_nodes[0].buffer(), b.budget_scale[1], second,
-                   b.subtree_node_count.buffer(), position.buffer(), leaf_position.buffer(),
-                   b.small_ref_tri.buffer(), nodes.buffer(), leaf_indices.buffer());
+    for (const SmallBatch& batch : b.small_batches) {
+        const cl::Buffer& second = batch.records[batch.records[1].bytes() ? 1 : 0].buffer();
+        enqueue_kernel(q, k.write_small, batch.roots, batch.root_begin, batch.roots,
+                       batch.ref_begin, b.small_first.id.buffer(), b.root_ref_start.buffer(),
+                       b.root_ref_count.buffer(), batch.budget_scale[0], batch.records[0].buffer(),
+                       batch.budget_scale[1], second, b.subtree_node_count.buffer(),
+                       position.buffer(), leaf_position.buffer(), b.small_ref_tri.buffer(),
+                       nodes.buffer(), leaf_indices.buffer());
+    }
     return nodes;
 }
 

@@ -314,6 +314,31 @@ TEST_CASE("opencl builder: depth limit and leaf threshold are respected") {
     CHECK(count_disagreements(small_t, scene, test::random_rays(scene, 500, 3)) == 0);
 }
 
+TEST_CASE("opencl builder: the small stage in batches of roots gives the same tree") {
+    // A scene of ten million triangles wants 4 GB of split-candidate masks, past many devices'
+    // largest allocation, so the small stage goes by batches of roots whose masks and records
+    // fit it. Batches of 16 KB (about 100 references) split these scenes into tens of batches,
+    // alone and with the second pass of subtrees that outgrow their first records (scale 1).
+    for (const Scene& scene : {test::random_triangles(3000, 37), test::cube_lattice(5)}) {
+        CAPTURE(scene.triangle_count());
+        const KdTree tree = build_opencl(test::opencl_test_device(), scene);
+        for (unsigned scale : {10u, 1u}) {
+            CAPTURE(scale);
+            const KdTree batched = detail::build_opencl_with_limits(test::opencl_test_device(),
+                                                                    scene, {}, {scale, 16384});
+            CHECK(check_tree(batched, scene).empty());
+            REQUIRE(batched.nodes.size() == tree.nodes.size());
+            int differ = 0;
+            for (std::size_t i = 0; i < tree.nodes.size(); ++i)
+                differ += batched.nodes[i].split_or_count != tree.nodes[i].split_or_count ||
+                          batched.nodes[i].axis_and_offset != tree.nodes[i].axis_and_offset;
+            CHECK(differ == 0);
+            CHECK(batched.leaf_indices == tree.leaf_indices);
+            CHECK(count_disagreements(batched, scene, test::random_rays(scene, 1000, 19)) == 0);
+        }
+    }
+}
+
 TEST_CASE("opencl builder: subtrees that outgrow their first records give the same tree") {
     // The small stage sets aside scale * (n + 1) node records per small root of n references and
     // builds the subtrees that outgrow them again in a second pass, into records of their own.
@@ -332,7 +357,7 @@ TEST_CASE("opencl builder: subtrees that outgrow their first records give the sa
         CAPTURE(scene.triangle_count());
         const KdTree tree = build_opencl(test::opencl_test_device(), scene);
         const KdTree again =
-            detail::build_opencl_with_subtree_budget(test::opencl_test_device(), scene, {}, 1);
+            detail::build_opencl_with_limits(test::opencl_test_device(), scene, {}, {1, 0});
         CHECK(check_tree(again, scene).empty());
         REQUIRE(again.nodes.size() == tree.nodes.size());
         for (std::size_t i = 0; i < tree.nodes.size(); ++i) {

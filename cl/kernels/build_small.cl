@@ -17,6 +17,11 @@
  * reference, [16 ref + k] the triangles below its candidate k and [16 ref + 8 + k] those above
  * (k < 6; two lanes of padding each), so that the kernels read a reference's masks as two ulong8.
  *
+ * Both kernels run over one batch of small roots at a time: roots root_begin.., whose references
+ * are ref_begin.. (contiguous, as the large stage lays them out). side_masks and the node records
+ * hold the batch's alone, indexed from those starts, so that neither need outgrow the device's
+ * largest allocation (a scene of ten million triangles wants 4 GB of masks).
+ *
  * Triangles lying in a candidate plane go to the cheaper side, as in the reference builder (Wald &
  * Havran 2006, "p_side"): a triangle that is flat on an axis has its lo and hi candidates at the
  * same plane, so the two lanes carry the two choices, lo with the plane's flat triangles below
@@ -56,13 +61,13 @@ inline int8 kd_planar_above_lanes(float8 pos) {
  * one float8 (two lanes unused), so each box of the root is loaded once for six planes; the
  * work-items of one root run the same loop, which keeps GPU lanes converged. Per plane, one
  * scalar loop over the root took 86 ms of CPU per kitchen build (perf); this one 24 ms. */
-__kernel void kd_compute_split_masks(uint refs, __global const float* ref_box,
+__kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const float* ref_box,
                                      __global const uint* ref_root,
                                      __global const uint* root_ref_start,
                                      __global const uint* root_ref_count,
                                      __global ulong* side_masks) {
-    const uint ref = get_global_id(0);
-    if (ref >= refs) return;
+    if (get_global_id(0) >= refs) return;
+    const uint ref = ref_begin + (uint)get_global_id(0);
     const float8 pos = kd_candidate_lanes(ref_box + (size_t)ref * 6);
     const int8 planar_above = kd_planar_above_lanes(pos);
     const uint root = ref_root[ref];
@@ -77,10 +82,9 @@ __kernel void kd_compute_split_masks(uint refs, __global const float* ref_box,
         below |= convert_ulong8(is_below & 1) << (ulong)j;
         above |= convert_ulong8(is_above & 1) << (ulong)j;
     }
-    vstore8(below, 0, side_masks + (size_t)ref * 16);
-    vstore8(above, 1, side_masks + (size_t)ref * 16);
+    vstore8(below, 0, side_masks + (size_t)(ref - ref_begin) * 16);
+    vstore8(above, 1, side_masks + (size_t)(ref - ref_begin) * 16);
 }
-
 
 /* The children of a node (its triangles `node`) for the six candidates of one reference, at pos
  * (lanes as in kd_compute_split_masks), given the candidates' masks: inside the node's box (lo,
@@ -91,8 +95,7 @@ __kernel void kd_compute_split_masks(uint refs, __global const float* ref_box,
  * would also count the triangles that only extend past it. Lanes that split nothing (other
  * candidates on a face, lanes 6 and 7) get no child at all: *valid is 0 there. */
 inline void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above, float8 pos, float8 lo,
-                                  float8 hi, ulong8* below_out, ulong8* above_out,
-                                  long8* valid) {
+                                  float8 hi, ulong8* below_out, ulong8* above_out, long8* valid) {
     const int8 lo_lane = (int8)(-1, 0, -1, 0, -1, 0, 0, 0);
     const int8 hi_lane = (int8)(0, -1, 0, -1, 0, -1, 0, 0);
     below &= node;
@@ -117,7 +120,7 @@ inline void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above, float
 #define KDRAY_NO_CANDIDATE 0xFFFFFFFFu
 
 inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global const float* ref_box,
-                                __global const ulong* side_masks, float cost_traversal,
+                                __global const ulong* root_masks, float cost_traversal,
                                 float cost_intersection, float empty_bonus) {
     /* Child area = 2 (cross + d * ring); the 2 and 1/area fold into one scale of the counts.
      * The six candidates of a triangle are the lanes of one float8 (lane k = 2 * axis + side, as
@@ -129,21 +132,22 @@ inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global cons
     kd_box_lanes(box, &lo, &hi);
     const float8 cross =
         (float8)(e.y * e.z, e.y * e.z, e.z * e.x, e.z * e.x, e.x * e.y, e.x * e.y, 0, 0);
-    const float8 ring = (float8)(e.y + e.z, e.y + e.z, e.z + e.x, e.z + e.x, e.x + e.y, e.x + e.y,
-                                 0, 0);
+    const float8 ring =
+        (float8)(e.y + e.z, e.y + e.z, e.z + e.x, e.z + e.x, e.x + e.y, e.x + e.y, 0, 0);
     const ulong8 node = (ulong8)(mask);
     const uint8 lane_index = (uint8)(0, 1, 2, 3, 4, 5, 6, 7);
     /* A candidate must beat the leaf, C_i N; NO_CANDIDATE is the largest index. */
     float8 lane_cost = (float8)(cost_intersection * (float)popcount(mask));
     uint8 lane_candidate = (uint8)(KDRAY_NO_CANDIDATE);
     for (ulong rest = mask; rest != 0; rest &= rest - 1) {
-        const uint ref = start + (uint)popcount((rest & (0ul - rest)) - 1ul); /* lowest set bit */
+        const uint j = (uint)popcount((rest & (0ul - rest)) - 1ul); /* lowest set bit */
+        const uint ref = start + j;
         const float8 pos = kd_candidate_lanes(ref_box + (size_t)ref * 6);
         ulong8 below, above;
         long8 valid;
-        kd_candidate_children(node, vload8(0, side_masks + (size_t)ref * 16),
-                              vload8(1, side_masks + (size_t)ref * 16), pos, lo, hi, &below,
-                              &above, &valid);
+        kd_candidate_children(node, vload8(0, root_masks + (size_t)j * 16),
+                              vload8(1, root_masks + (size_t)j * 16), pos, lo, hi, &below, &above,
+                              &valid);
         const float8 n_below = convert_float8(popcount(below));
         const float8 n_above = convert_float8(popcount(above));
         float8 cost = cost_traversal + cost_scale * (n_below * (cross + (pos - lo) * ring) +
@@ -187,10 +191,9 @@ inline int kd_plane_misses_box(__global const float* tri, KdBox box) {
     const float distance = dot(n, to_centre), radius = dot(fabs(n), half_extent);
     /* The normal is off by a few ulps of |e1| |e2| per component; the distances by that times
      * the lever arm. */
-    const float reach = fabs(to_centre.x) + fabs(to_centre.y) + fabs(to_centre.z) +
-                        half_extent.x + half_extent.y + half_extent.z;
-    const float slack =
-        1e-5f * (fabs(distance) + radius) + 1e-4f * length(e1) * length(e2) * reach;
+    const float reach = fabs(to_centre.x) + fabs(to_centre.y) + fabs(to_centre.z) + half_extent.x +
+                        half_extent.y + half_extent.z;
+    const float slack = 1e-5f * (fabs(distance) + radius) + 1e-4f * length(e1) * length(e2) * reach;
     return fabs(distance) > radius + slack;
 }
 
@@ -225,8 +228,9 @@ typedef struct KdPendingNode {
 /* Small-node stage (§4.2), one work-item per small root: split the root's subtree depth first,
  * writing its nodes in preorder (below child right after its parent, above child after the below
  * subtree, as the output layout wants) to the root's run of subtree_nodes, which holds
- * budget_scale * (count + 1) records for a root of count references (the record layout is in
- * build_common.cl; leaf offsets count from the subtree's first leaf reference). A node becomes a
+ * budget_scale * (count + 1) records for a root of count references, from budget_scale * (the
+ * batch's references and roots before it) on (the record layout is in build_common.cl; leaf
+ * offsets count from the subtree's first leaf reference). A node becomes a
  * leaf when no split beats C_i N, at the depth limit, or when its box has no area.
  *
  * Outputs per root: its node and leaf reference counts. A subtree that outgrows its run is still
@@ -235,19 +239,21 @@ typedef struct KdPendingNode {
  * pass (first_scale != 0, with a larger budget_scale and its own subtree_nodes) builds again only
  * the subtrees that outgrew the first pass's first_scale. */
 __kernel void kd_build_small_subtrees(
-    uint roots, __global const float* root_box, __global const uint* root_depth,
-    __global const uint* root_ref_start, __global const uint* root_ref_count,
-    __global const float* ref_box, __global const ulong* side_masks,
-    __global const uint* ref_tri, __global const float* triangles, float cost_traversal,
-    float cost_intersection, float empty_bonus, uint max_depth, uint budget_scale,
-    uint first_scale, __global uint4* subtree_nodes, __global uint* subtree_node_count,
-    __global uint* subtree_leaf_refs, __global uint* totals) {
-    const uint q = get_global_id(0);
-    if (q >= roots) return;
+    uint root_begin, uint roots, uint ref_begin, __global const float* root_box,
+    __global const uint* root_depth, __global const uint* root_ref_start,
+    __global const uint* root_ref_count, __global const float* ref_box,
+    __global const ulong* side_masks, __global const uint* ref_tri, __global const float* triangles,
+    float cost_traversal, float cost_intersection, float empty_bonus, uint max_depth,
+    uint budget_scale, uint first_scale, __global uint4* subtree_nodes,
+    __global uint* subtree_node_count, __global uint* subtree_leaf_refs, __global uint* totals) {
+    if (get_global_id(0) >= roots) return;
+    const uint q = root_begin + (uint)get_global_id(0);
     const uint start = root_ref_start[q], count = root_ref_count[q];
     if (first_scale != 0 && subtree_node_count[q] <= first_scale * (count + 1)) return;
     const uint budget = budget_scale * (count + 1);
-    __global uint4* out = subtree_nodes + (size_t)budget_scale * (start + q);
+    __global uint4* out =
+        subtree_nodes + (size_t)budget_scale * ((start - ref_begin) + (q - root_begin));
+    __global const ulong* root_masks = side_masks + (size_t)(start - ref_begin) * 16;
     KdPendingNode stack[KDRAY_MAX_DEPTH];
     uint top = 0;
     KdPendingNode node;
@@ -264,7 +270,7 @@ __kernel void kd_build_small_subtrees(
             out[node.parent].x = node.parent_axis | (at << 2);
         uint best = KDRAY_NO_CANDIDATE;
         if (node.mask != 0 && node.depth < max_depth && kd_box_area(node.box) > 0.0f)
-            best = kd_best_small_split(node.box, node.mask, start, ref_box, side_masks,
+            best = kd_best_small_split(node.box, node.mask, start, ref_box, root_masks,
                                        cost_traversal, cost_intersection, empty_bonus);
         if (best == KDRAY_NO_CANDIDATE) {
             /* Leaf: its triangles are the mask's, its references the next in preorder. */
@@ -287,9 +293,9 @@ __kernel void kd_build_small_subtrees(
             kd_box_lanes(node.box, &lo, &hi);
             ulong8 below, above;
             long8 valid;
-            kd_candidate_children((ulong8)(node.mask), vload8(0, side_masks + (size_t)ref * 16),
-                                  vload8(1, side_masks + (size_t)ref * 16), kd_candidate_lanes(b),
-                                  lo, hi, &below, &above, &valid);
+            __global const ulong* masks = root_masks + (size_t)(ref - start) * 16;
+            kd_candidate_children((ulong8)(node.mask), vload8(0, masks), vload8(1, masks),
+                                  kd_candidate_lanes(b), lo, hi, &below, &above, &valid);
             vstore8(below, 0, children[0]);
             vstore8(above, 0, children[1]);
         }
