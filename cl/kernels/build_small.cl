@@ -72,16 +72,27 @@ __kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const f
     const int8 planar_above = kd_planar_above_lanes(pos);
     const uint root = ref_root[ref];
     const uint start = root_ref_start[root], count = root_ref_count[root];
-    ulong8 below = (ulong8)(0), above = (ulong8)(0);
-    for (uint j = 0; j < count; ++j) {
-        float8 lo, hi;
-        kd_box_lanes(kd_load_box(ref_box, start + j), &lo, &hi);
-        const int8 crosses_up = hi > pos; /* -1 where true */
-        const int8 is_above = crosses_up | (planar_above & (lo >= pos));
-        const int8 is_below = (lo < pos) | (~planar_above & ~crosses_up);
-        below |= convert_ulong8(is_below & 1) << (ulong)j;
-        above |= convert_ulong8(is_above & 1) << (ulong)j;
+    /* The masks' low and high 32 bits, each in 32-bit lanes (half the vector width of 64-bit
+     * lanes), in registers: one loop per half. */
+    uint8 below_half[2], above_half[2];
+    for (uint part = 0; part < 2; ++part) {
+        uint8 below_bits = (uint8)(0), above_bits = (uint8)(0);
+        const uint end = min(count, 32u * (part + 1));
+        for (uint j = 32u * part; j < end; ++j) {
+            float8 lo, hi;
+            kd_box_lanes(kd_load_box(ref_box, start + j), &lo, &hi);
+            const int8 crosses_up = hi > pos; /* -1 where true */
+            const int8 is_above = crosses_up | (planar_above & (lo >= pos));
+            const int8 is_below = (lo < pos) | (~planar_above & ~crosses_up);
+            const uint bit = 1u << (j & 31u);
+            below_bits |= as_uint8(is_below) & bit;
+            above_bits |= as_uint8(is_above) & bit;
+        }
+        below_half[part] = below_bits;
+        above_half[part] = above_bits;
     }
+    const ulong8 below = convert_ulong8(below_half[0]) | (convert_ulong8(below_half[1]) << 32);
+    const ulong8 above = convert_ulong8(above_half[0]) | (convert_ulong8(above_half[1]) << 32);
     vstore8(below, 0, side_masks + (size_t)(ref - ref_begin) * 16);
     vstore8(above, 1, side_masks + (size_t)(ref - ref_begin) * 16);
 }
