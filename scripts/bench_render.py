@@ -6,7 +6,8 @@ run, with the same camera and thread count.
    max_depth 1, so only centre rays are cast) against embree_ref's, median over --repeat frames.
 2. Dynamic scenes (the BART Kitchen and Robots frames, horse poses, testdata/anim): mean frame time
    of kdray (OpenCL build + trace, primary rays, 1024x768) against Embree medium's build + trace of
-   the same frames with the same keyframed cameras.
+   the same frames with the same keyframed cameras, each frame's the median of three runs on
+   both sides.
 3. The glass room (testdata/cornell) at 1 spp, 640x480, with every effect.
 Writes docs/bench-render.md and .csv with the machine it ran on.
 
@@ -26,6 +27,8 @@ from bench_common import (ROOT, SHARED, benchmark_scenes, build_peer, machine_de
                           median, run_json, write_report)
 
 THREADS = os.cpu_count()
+# Dynamic scenes: runs per frame on each side, whose median counts.
+PEER_REPEAT = 3
 
 
 def camera_at(keys, frame):
@@ -121,18 +124,22 @@ def dynamic(kdray, peer, tmp):
         render = os.path.join(tmp, "dynamic.json")
         with open(render, "w") as f:
             json.dump(j, f)
-        frames = kdray_frames(kdray, objs, render, os.path.join(tmp, "dyn"))
-        kd = [f["build_ms"] + f["trace_ms"] for f in frames]
-        row = {"scene": name, "frames": len(objs), "triangles": frames[0]["scene"]["triangles"],
-               "kdray_frame_ms": sum(kd) / len(kd),
-               "kdray_build_ms": sum(f["build_ms"] for f in frames) / len(kd),
-               "kdray_trace_ms": sum(f["trace_ms"] for f in frames) / len(kd)}
+        # Each frame's build and trace are the medians of PEER_REPEAT runs of the sequence, as
+        # the peer's are of PEER_REPEAT builds and traces of the frame.
+        runs = [kdray_frames(kdray, objs, render, os.path.join(tmp, "dyn"))
+                for _ in range(PEER_REPEAT)]
+        build = [median([r[k]["build_ms"] for r in runs]) for k in range(len(objs))]
+        trace = [median([r[k]["trace_ms"] for r in runs]) for k in range(len(objs))]
+        row = {"scene": name, "frames": len(objs), "triangles": runs[0][0]["scene"]["triangles"],
+               "kdray_frame_ms": (sum(build) + sum(trace)) / len(objs),
+               "kdray_build_ms": sum(build) / len(objs),
+               "kdray_trace_ms": sum(trace) / len(objs)}
         if peer:
             em = []
             for k, obj in enumerate(objs):
                 cam = primary_only(camera, os.path.join(tmp, "peer.json"), frame=k)
-                r = run_json([peer, obj, "--camera", cam, "--quality", "medium", "--repeat", "3",
-                              "--threads", str(THREADS)])
+                r = run_json([peer, obj, "--camera", cam, "--quality", "medium", "--repeat",
+                              str(PEER_REPEAT), "--threads", str(THREADS)])
                 em.append(r["build_ms"] + r["trace_ms"])
             row["embree_frame_ms"] = sum(em) / len(em)
         rows.append(row)
@@ -188,7 +195,8 @@ def main():
         lines.append(f"| {r['scene']} | {r['triangles']} | {r['kdray_mrays_per_s']:.2f} | "
                      f"{r.get('embree_mrays_per_s', 0):.2f} | "
                      f"{ratio(r['kdray_mrays_per_s'], r.get('embree_mrays_per_s'))} |")
-    lines += ["", "## Dynamic scenes: mean frame time, build + trace of primary rays", "",
+    lines += ["", "## Dynamic scenes: mean frame time, build + trace of primary rays (per frame the median of "
+              f"{PEER_REPEAT} runs on each side)", "",
               "| sequence | frames | triangles | kdray build ms | kdray trace ms | kdray frame ms "
               "| Embree medium frame ms | kdray / Embree |", "|---|---:|---:|---:|---:|---:|---:|---:|"]
     for r in dyn:
