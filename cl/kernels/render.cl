@@ -95,6 +95,19 @@ __kernel void kd_trace_camera_packets(__global const KdNode* nodes,
     }
 }
 
+/* Pixel i's outputs (outputs: KDRAY_RENDER_* bits), as both pixel kernels write them. */
+inline void kd_store_pixel(const KdPixel* pixel, size_t i, kd_u32 outputs, __global float* rgb,
+                           __global KdHit* hits, __global float* normals,
+                           __global KdRayCounts* ray_counts) {
+    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = pixel->rgb[c];
+    if (outputs & KDRAY_RENDER_NORMALS)
+        for (int c = 0; c < 3; ++c) normals[3 * i + c] = pixel->normal[c];
+    hits[i] = pixel->centre_hit;
+#if KDRAY_COMPILED_EFFECTS != 0
+    ray_counts[i] = pixel->rays;
+#endif
+}
+
 /* One pixel per work-item; outputs: KDRAY_RENDER_* bits. With KDRAY_RENDER_TRACED_PRIMARY the
  * primary rays' hits are in traced (as kd_trace_camera_packets writes them), else every ray is
  * traced here. */
@@ -117,14 +130,7 @@ __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u
     const KdPixel pixel = kd_render_pixel(
         &scene, &v, x, y, (outputs & KDRAY_RENDER_TRACED_PRIMARY) ? traced + in_launch : 0,
         rows * view.width);
-    const size_t i = (size_t)y * view.width + x;
-    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = pixel.rgb[c];
-    if (outputs & KDRAY_RENDER_NORMALS)
-        for (int c = 0; c < 3; ++c) normals[3 * i + c] = pixel.normal[c];
-    hits[i] = pixel.centre_hit;
-#if KDRAY_COMPILED_EFFECTS != 0
-    ray_counts[i] = pixel.rays;
-#endif
+    kd_store_pixel(&pixel, (size_t)y * view.width + x, outputs, rgb, hits, normals, ray_counts);
 }
 
 /* kd_render_pixels for spp 1 with the primary hits traced, in a kernel without reflection and
@@ -146,18 +152,9 @@ __kernel void kd_shade_traced_pixels(
     const KdView v = view;
     const size_t in_launch = (size_t)row * view.width + x;
     const KdHit hit = traced[in_launch];
-    KdHit centre;
-    float colour[3], normal[3];
-    KdRayCounts counts;
-    counts.primary = counts.shadow = counts.reflection = counts.refraction = 0u;
-    kd_trace_direct_sample(&scene, &v, kd_primary_ray(&v, x, y, 0u), &hit, colour, &counts, &centre,
-                           normal);
-    const size_t i = (size_t)y * view.width + x;
-    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = colour[c];
-    if (outputs & KDRAY_RENDER_NORMALS)
-        for (int c = 0; c < 3; ++c) normals[3 * i + c] = normal[c];
-    hits[i] = centre;
-#if KDRAY_COMPILED_EFFECTS != 0
-    ray_counts[i] = counts;
-#endif
+    KdPixel pixel;
+    pixel.rays.primary = pixel.rays.shadow = pixel.rays.reflection = pixel.rays.refraction = 0u;
+    kd_trace_direct_sample(&scene, &v, kd_primary_ray(&v, x, y, 0u), &hit, pixel.rgb, &pixel.rays,
+                           &pixel.centre_hit, pixel.normal);
+    kd_store_pixel(&pixel, (size_t)y * view.width + x, outputs, rgb, hits, normals, ray_counts);
 }
