@@ -95,16 +95,43 @@ __kernel void kd_trace_camera_packets(__global const KdNode* nodes,
     }
 }
 
-/* Pixel i's outputs (outputs: KDRAY_RENDER_* bits), as both pixel kernels write them. */
-inline void kd_store_pixel(const KdPixel* pixel, size_t i, kd_u32 outputs, __global float* rgb,
-                           __global KdHit* hits, __global float* normals,
-                           __global KdRayCounts* ray_counts) {
-    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = pixel->rgb[c];
+/* The work-item of pixel (get_global_id(0), first_row + get_global_id(1)), for both pixel kernels
+ * below. direct_only: the pixel's one sample, whose primary hit is in traced, shaded by
+ * kd_trace_direct_sample alone; a constant in each kernel, so that kd_shade_traced_pixels holds
+ * no primary walk and no pending-ray stack. */
+KDRAY_HOT_INLINE void kd_pixel_work_item(
+    __global const KdNode* nodes, __global const kd_u32* leaf_indices,
+    __global const float* triangles, __global const kd_u32* material_ids,
+    __global const KdMaterial* materials, __global const KdLight* lights,
+    __global const float* bounds, const KdView* view, const kd_u32 first_row, const kd_u32 rows,
+    __global float* rgb, __global KdHit* hits, __global float* normals,
+    __global KdRayCounts* ray_counts, __global const KdHit* traced, const kd_u32 outputs,
+    const int direct_only) {
+    const kd_u32 x = (kd_u32)get_global_id(0);
+    const kd_u32 row = (kd_u32)get_global_id(1);
+    if (x >= view->width || row >= rows) return;
+    const kd_u32 y = first_row + row;
+    const KdSceneView scene =
+        kd_scene_view(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds);
+    const size_t in_launch = (size_t)row * view->width + x;
+    KdPixel pixel;
+    if (direct_only) {
+        const KdHit hit = traced[in_launch];
+        pixel.rays.primary = pixel.rays.shadow = pixel.rays.reflection = pixel.rays.refraction = 0u;
+        kd_trace_direct_sample(&scene, view, kd_primary_ray(view, x, y, 0u), &hit, pixel.rgb,
+                               &pixel.rays, &pixel.centre_hit, pixel.normal);
+    } else {
+        pixel = kd_render_pixel(&scene, view, x, y,
+                                (outputs & KDRAY_RENDER_TRACED_PRIMARY) ? traced + in_launch : 0,
+                                rows * view->width);
+    }
+    const size_t i = (size_t)y * view->width + x;
+    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = pixel.rgb[c];
     if (outputs & KDRAY_RENDER_NORMALS)
-        for (int c = 0; c < 3; ++c) normals[3 * i + c] = pixel->normal[c];
-    hits[i] = pixel->centre_hit;
+        for (int c = 0; c < 3; ++c) normals[3 * i + c] = pixel.normal[c];
+    hits[i] = pixel.centre_hit;
 #if KDRAY_COMPILED_EFFECTS != 0
-    ray_counts[i] = pixel->rays;
+    ray_counts[i] = pixel.rays;
 #endif
 }
 
@@ -119,23 +146,13 @@ __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u
                                __global KdHit* hits, __global float* normals,
                                __global KdRayCounts* ray_counts, __global const KdHit* traced,
                                const kd_u32 outputs) {
-    const kd_u32 x = (kd_u32)get_global_id(0);
-    const kd_u32 row = (kd_u32)get_global_id(1);
-    if (x >= view.width || row >= rows) return;
-    const kd_u32 y = first_row + row;
-    const KdSceneView scene =
-        kd_scene_view(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds);
     const KdView v = view;
-    const size_t in_launch = (size_t)row * view.width + x;
-    const KdPixel pixel = kd_render_pixel(
-        &scene, &v, x, y, (outputs & KDRAY_RENDER_TRACED_PRIMARY) ? traced + in_launch : 0,
-        rows * view.width);
-    kd_store_pixel(&pixel, (size_t)y * view.width + x, outputs, rgb, hits, normals, ray_counts);
+    kd_pixel_work_item(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds, &v,
+                       first_row, rows, rgb, hits, normals, ray_counts, traced, outputs, 0);
 }
 
 /* kd_render_pixels for spp 1 with the primary hits traced, in a kernel without reflection and
- * refraction: kd_render_pixel's one sample, its shading (kd_trace_direct_sample) and nothing else,
- * no primary walk and no pending-ray stack. */
+ * refraction: kd_render_pixel's one sample and its shading, nothing else. */
 __kernel void kd_shade_traced_pixels(
     __global const KdNode* nodes, __global const kd_u32* leaf_indices,
     __global const float* triangles, __global const kd_u32* material_ids,
@@ -143,18 +160,7 @@ __kernel void kd_shade_traced_pixels(
     __global const float* bounds, const KdView view, const kd_u32 first_row, const kd_u32 rows,
     __global float* rgb, __global KdHit* hits, __global float* normals,
     __global KdRayCounts* ray_counts, __global const KdHit* traced, const kd_u32 outputs) {
-    const kd_u32 x = (kd_u32)get_global_id(0);
-    const kd_u32 row = (kd_u32)get_global_id(1);
-    if (x >= view.width || row >= rows) return;
-    const kd_u32 y = first_row + row;
-    const KdSceneView scene =
-        kd_scene_view(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds);
     const KdView v = view;
-    const size_t in_launch = (size_t)row * view.width + x;
-    const KdHit hit = traced[in_launch];
-    KdPixel pixel;
-    pixel.rays.primary = pixel.rays.shadow = pixel.rays.reflection = pixel.rays.refraction = 0u;
-    kd_trace_direct_sample(&scene, &v, kd_primary_ray(&v, x, y, 0u), &hit, pixel.rgb, &pixel.rays,
-                           &pixel.centre_hit, pixel.normal);
-    kd_store_pixel(&pixel, (size_t)y * view.width + x, outputs, rgb, hits, normals, ray_counts);
+    kd_pixel_work_item(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds, &v,
+                       first_row, rows, rgb, hits, normals, ray_counts, traced, outputs, 1);
 }
