@@ -60,6 +60,13 @@ const char* pixel_kernel_name(const RenderInputs& inputs, bool packets) {
                                                             : "kd_render_pixels";
 }
 
+/// Whether the shadow rays from the packets' primary hits are traced as packets too
+/// (kd_trace_shadow_packets): with packets, shadows, and no more lights than a bit mask holds.
+bool use_shadow_packets(const RenderInputs& inputs, bool packets) {
+    return packets && (inputs.effects.bits() & KDRAY_EFFECT_SHADOWS) != 0u &&
+           inputs.view.light_count > 0u && inputs.view.light_count <= KDRAY_PACKET_SHADOW_LIGHTS;
+}
+
 /// Pixels of a work-group. Square tiles keep neighbouring rays, and their paths through the tree,
 /// together, which is what a GPU's SIMD lanes want. On PoCL (which runs a work-group as a loop
 /// over its work-items) the shape made no measurable difference: process CPU time per frame for
@@ -96,7 +103,7 @@ std::size_t round_up(std::size_t n, std::size_t multiple) {
 /// The device buffers a frame's kernels read and write.
 struct RenderBuffers {
     cl::Buffer nodes, leaf_indices, triangles, material_ids, materials, lights, bounds;
-    cl::Buffer rgb, hits, normals, counts, traced;
+    cl::Buffer rgb, hits, normals, counts, traced, occluded;
 };
 
 /// Every argument of kd_render_pixels (render.cl) and of kd_trace_camera_packets, in their
@@ -105,11 +112,15 @@ void set_pixel_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& vi
                     kd_u32 outputs) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.material_ids, b.materials,
                     b.lights, b.bounds, view, kd_u32(0), kd_u32(0), b.rgb, b.hits, b.normals,
-                    b.counts, b.traced, outputs);
+                    b.counts, b.traced, b.occluded, outputs);
 }
 void set_packet_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& view) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.bounds, view, kd_u32(0),
                     kd_u32(0), b.traced);
+}
+void set_shadow_packet_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& view) {
+    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.lights, b.bounds, view,
+                    kd_u32(0), kd_u32(0), b.traced, b.occluded);
 }
 
 /// The launch of `rows` image rows from `first_row`, in tiles.
@@ -123,11 +134,12 @@ void enqueue_rows(ClDevice& device, cl::Kernel& kernel, std::size_t width, std::
         cl::NDRange(kTileWidth, kTileHeight));
 }
 
-/// The packet launch of the primary rays of `rows` image rows from `first_row`.
+/// The packet launch (kd_trace_camera_packets, or kd_trace_shadow_packets whose first_row is
+/// argument `first_row_arg`) of `rows` image rows from `first_row`.
 void enqueue_packets(ClDevice& device, cl::Kernel& kernel, const KdView& view,
-                     std::size_t first_row, std::size_t rows) {
-    kernel.setArg(5, kd_u32(first_row));
-    kernel.setArg(6, kd_u32(rows));
+                     std::size_t first_row, std::size_t rows, cl_uint first_row_arg = 5) {
+    kernel.setArg(first_row_arg, kd_u32(first_row));
+    kernel.setArg(first_row_arg + 1, kd_u32(rows));
     const std::size_t tiles_x = (view.width + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
     const std::size_t tiles_y = (rows + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
     device.queue().enqueueNDRangeKernel(
@@ -148,7 +160,7 @@ void prepare_opencl_renderer(ClDevice& device, const RenderInputs& inputs) {
     const KdView view{};
     with_cl_context("preparing the render kernel on " + device.info().name, [&] {
         const cl::Buffer dummy = device.allocate(sizeof(KdHit), "render kernel warm-up buffer");
-        const RenderBuffers buffers{dummy, dummy, dummy, dummy, dummy, dummy,
+        const RenderBuffers buffers{dummy, dummy, dummy, dummy, dummy, dummy, dummy,
                                     dummy, dummy, dummy, dummy, dummy, dummy};
         set_pixel_args(kernel, buffers, view, 0);
         enqueue_rows(device, kernel, 1, 0, 1);
@@ -157,6 +169,12 @@ void prepare_opencl_renderer(ClDevice& device, const RenderInputs& inputs) {
                 render_kernel(device, effects, intersect, "kd_trace_camera_packets");
             set_packet_args(packet, buffers, view);
             enqueue_packets(device, packet, view, 0, 1);
+        }
+        if (use_shadow_packets(inputs, packets)) {
+            cl::Kernel shadow =
+                render_kernel(device, effects, intersect, "kd_trace_shadow_packets");
+            set_shadow_packet_args(shadow, buffers, view);
+            enqueue_packets(device, shadow, view, 0, 1, 6);
         }
         device.queue().finish();
     });
@@ -195,23 +213,33 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
     b.counts = device.allocate(count_rays ? pixels * sizeof(KdRayCounts) : 1, "ray counts");
     // The primary hits of one launch's rows (all of its pixels' primary rays), when packets trace
     // them; in-order queue, so one buffer serves every launch.
-    b.traced = device.allocate(
-        packets ? step * view.width * kd_primary_rays_per_pixel(&view) * sizeof(KdHit)
-                : sizeof(KdHit),
-        "primary hit buffer");
-    cl::Kernel packet;
+    const std::size_t traced_rays = step * view.width * kd_primary_rays_per_pixel(&view);
+    b.traced = device.allocate(packets ? traced_rays * sizeof(KdHit) : sizeof(KdHit),
+                               "primary hit buffer");
+    // ... and, beside each, the lights its shadow rays find blocked.
+    const bool shadow_packets = use_shadow_packets(inputs, packets);
+    b.occluded = device.allocate(shadow_packets ? traced_rays * sizeof(kd_u32) : sizeof(kd_u32),
+                                 "shadow ray results");
+    cl::Kernel packet, shadow;
     with_cl_context("rendering a frame on " + device.info().name, [&] {
         if (packets) {
             packet = render_kernel(device, inputs.effects.bits(), inputs.intersect,
                                    "kd_trace_camera_packets");
             set_packet_args(packet, b, view);
         }
+        if (shadow_packets) {
+            shadow = render_kernel(device, inputs.effects.bits(), inputs.intersect,
+                                   "kd_trace_shadow_packets");
+            set_shadow_packet_args(shadow, b, view);
+        }
         set_pixel_args(kernel, b, view,
                        (packets ? KDRAY_RENDER_TRACED_PRIMARY : 0u) |
+                           (shadow_packets ? KDRAY_RENDER_TRACED_SHADOWS : 0u) |
                            (inputs.normals ? KDRAY_RENDER_NORMALS : 0u));
         for (std::size_t row = 0; row < view.height; row += step) {
             const std::size_t rows = std::min<std::size_t>(step, view.height - row);
             if (packets) enqueue_packets(device, packet, view, row, rows);
+            if (shadow_packets) enqueue_packets(device, shadow, view, row, rows, 6);
             enqueue_rows(device, kernel, view.width, row, rows);
         }
     });

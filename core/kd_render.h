@@ -165,50 +165,81 @@ KDRAY_INLINE KdPendingRay kd_pending(const kd_f32* org, const kd_f32* dir, const
     return r;
 }
 
+/* The lights that shine on a frame's surfaces: the render file's, which shine only with shadows
+ * on; without, the headlight. Shadows are on exactly when the render file has lights
+ * (decide_effects), so a kernel without them knows at compile time that its one light is the
+ * headlight: a loop of one trip, unrolled (PoCL, BART Kitchen headlight frame: trace 43 -> 37
+ * ms). Returns the render file's light count, 0 for the headlight. */
+KDRAY_HOT_INLINE kd_u32 kd_shining_lights(const KdView* view) {
+    return KDRAY_EFFECT_ON(view, KDRAY_EFFECT_SHADOWS) ? view->light_count : 0u;
+}
+
+/* Light i of the render file's light_count at p (light_count 0: the headlight): the unit
+ * direction toward it, the irradiance it brings and its distance (infinite for the headlight and
+ * directional lights). */
+KDRAY_HOT_INLINE void kd_light_at(const KdSceneView* scene, const KdView* view, kd_u32 light_count,
+                                  kd_u32 i, const kd_f32* p, kd_f32* to_light, kd_f32* irradiance,
+                                  kd_f32* distance) {
+    *distance = KDRAY_INF;
+    if (light_count == 0u) {
+        /* No lights in the render file: a headlight, which casts no visible shadow. */
+        kd_set3(to_light, -view->forward[0], -view->forward[1], -view->forward[2]);
+        kd_set3(irradiance, 1.0f, 1.0f, 1.0f);
+        return;
+    }
+    KDRAY_GLOBAL const KdLight* light = scene->lights + i;
+    if (light->type == KDRAY_LIGHT_POINT) {
+        kd_set3(to_light, light->vec[0] - p[0], light->vec[1] - p[1], light->vec[2] - p[2]);
+        const kd_f32 d2 = kd_dot3(to_light, to_light);
+        *distance = KDRAY_SQRT(d2);
+        kd_set3(to_light, to_light[0] / *distance, to_light[1] / *distance,
+                to_light[2] / *distance);
+        kd_set3(irradiance, light->power[0] / d2, light->power[1] / d2, light->power[2] / d2);
+    } else {
+        kd_set3(to_light, -light->vec[0], -light->vec[1], -light->vec[2]);
+        kd_set3(irradiance, light->power[0], light->power[1], light->power[2]);
+    }
+}
+
+/* The point at t along `ray`. */
+KDRAY_HOT_INLINE void kd_hit_point(const KdRay* ray, kd_f32 t, kd_f32* p) {
+    for (int a = 0; a < 3; ++a) p[a] = ray->org[a] + t * ray->dir[a];
+}
+
+/* The shadow ray from p (normal n) toward a light `distance` away along to_light. */
+KDRAY_HOT_INLINE KdRay kd_shadow_ray(const KdView* view, const kd_f32* p, const kd_f32* n,
+                                     const kd_f32* to_light, kd_f32 distance) {
+    KdRay shadow;
+    for (int a = 0; a < 3; ++a) {
+        shadow.org[a] = p[a] + n[a] * view->ray_epsilon;
+        shadow.dir[a] = to_light[a];
+    }
+    shadow.tmin = 0.0f;
+    shadow.tmax = distance - view->ray_epsilon;
+    return shadow;
+}
+
 /* Direct light at p (normal n, facing the viewer) for the eye direction `dir`: diffuse and
- * highlight under every light, each behind a shadow ray; with shadows off, under the headlight. */
+ * highlight under every light, each behind a shadow ray; with shadows off, under the headlight.
+ * occluded, when not 0, says which of the shadow rays from p are blocked (bit i for light i, as
+ * kd_trace_shadow_packets traced them); else each shadow ray is traced here. */
 KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
                                       KDRAY_GLOBAL const KdMaterial* m, const kd_f32* p,
-                                      const kd_f32* n, const kd_f32* dir, kd_f32* out,
+                                      const kd_f32* n, const kd_f32* dir,
+                                      KDRAY_GLOBAL const kd_u32* occluded, kd_f32* out,
                                       KdRayCounts* rays) {
-    /* Shadows are on exactly when the render file has lights (decide_effects), so a kernel
-     * without them knows at compile time that its one light is the headlight: a loop of one
-     * trip, unrolled (PoCL, BART Kitchen headlight frame: trace 43 -> 37 ms). */
-    const kd_u32 light_count = KDRAY_EFFECT_ON(view, KDRAY_EFFECT_SHADOWS) ? view->light_count : 0u;
+    const kd_u32 light_count = kd_shining_lights(view);
     const kd_u32 lights = light_count == 0u ? 1u : light_count;
     for (kd_u32 i = 0; i < lights; ++i) {
-        kd_f32 to_light[3], irradiance[3], distance = KDRAY_INF;
-        if (light_count == 0u) {
-            /* No lights in the render file: a headlight, which casts no visible shadow. */
-            kd_set3(to_light, -view->forward[0], -view->forward[1], -view->forward[2]);
-            kd_set3(irradiance, 1.0f, 1.0f, 1.0f);
-        } else {
-            KDRAY_GLOBAL const KdLight* light = scene->lights + i;
-            if (light->type == KDRAY_LIGHT_POINT) {
-                kd_set3(to_light, light->vec[0] - p[0], light->vec[1] - p[1], light->vec[2] - p[2]);
-                const kd_f32 d2 = kd_dot3(to_light, to_light);
-                distance = KDRAY_SQRT(d2);
-                kd_set3(to_light, to_light[0] / distance, to_light[1] / distance,
-                        to_light[2] / distance);
-                kd_set3(irradiance, light->power[0] / d2, light->power[1] / d2,
-                        light->power[2] / d2);
-            } else {
-                kd_set3(to_light, -light->vec[0], -light->vec[1], -light->vec[2]);
-                kd_set3(irradiance, light->power[0], light->power[1], light->power[2]);
-            }
-        }
+        kd_f32 to_light[3], irradiance[3], distance;
+        kd_light_at(scene, view, light_count, i, p, to_light, irradiance, &distance);
         const kd_f32 cos_l = kd_dot3(n, to_light);
         if (cos_l <= 0.0f) continue;
         if (light_count != 0u) {
-            KdRay shadow;
-            for (int a = 0; a < 3; ++a) {
-                shadow.org[a] = p[a] + n[a] * view->ray_epsilon;
-                shadow.dir[a] = to_light[a];
-            }
-            shadow.tmin = 0.0f;
-            shadow.tmax = distance - view->ray_epsilon;
             rays->shadow += 1u;
-            if (kd_scene_occluded(scene, shadow)) continue;
+            if (occluded ? (*occluded >> i) & 1u
+                         : kd_scene_occluded(scene, kd_shadow_ray(view, p, n, to_light, distance)))
+                continue;
         }
         kd_f32 highlight = 0.0f;
         if (m->flags & KDRAY_MATERIAL_HIGHLIGHT) {
@@ -231,7 +262,8 @@ KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* vi
  * CPU device keeps in memory and a GPU in scratch). Its arithmetic is kd_trace_sample's for a
  * tree of one ray (weight 1, nothing pushed), so the two give identical colours. */
 KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdView* view,
-                                             KdRay primary, const KdHit* traced, kd_f32* rgb,
+                                             KdRay primary, const KdHit* traced,
+                                             KDRAY_GLOBAL const kd_u32* occluded, kd_f32* rgb,
                                              KdRayCounts* rays, KdHit* first_hit,
                                              kd_f32* first_normal) {
     rays->primary += 1u;
@@ -250,21 +282,24 @@ KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdV
     }
     KDRAY_GLOBAL const KdMaterial* m = scene->materials + scene->material_ids[hit.prim];
     kd_f32 p[3], direct[3] = {0.0f, 0.0f, 0.0f};
-    for (int a = 0; a < 3; ++a) p[a] = primary.org[a] + hit.t * primary.dir[a];
+    kd_hit_point(&primary, hit.t, p);
     const kd_f32 surface = 1.0f - m->transmit_fraction;
-    if (surface > 0.0f) kd_direct_light(scene, view, m, p, n, primary.dir, direct, rays);
+    if (surface > 0.0f) kd_direct_light(scene, view, m, p, n, primary.dir, occluded, direct, rays);
     for (int c = 0; c < 3; ++c) rgb[c] = 0.0f + (m->emission[c] + surface * direct[c]);
 }
 
 /* Traces one sample's ray tree from the primary ray and returns its colour. The primary ray's
- * hit is `traced` when it was traced already (by the packet kernel), else it is traced here. The
- * pending stack holds at most one ray per level: each traced ray pushes at most two, one of
- * which is traced next. */
+ * hit is `traced` when it was traced already (by the packet kernel), else it is traced here;
+ * likewise the shadow rays from that hit (`occluded`, as kd_direct_light reads it). The pending
+ * stack holds at most one ray per level: each traced ray pushes at most two, one of which is
+ * traced next. */
 KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* view, KdRay primary,
-                                      const KdHit* traced, kd_f32* rgb, KdRayCounts* rays,
-                                      KdHit* first_hit, kd_f32* first_normal) {
+                                      const KdHit* traced, KDRAY_GLOBAL const kd_u32* occluded,
+                                      kd_f32* rgb, KdRayCounts* rays, KdHit* first_hit,
+                                      kd_f32* first_normal) {
     if (!KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFLECTION | KDRAY_EFFECT_REFRACTION)) {
-        kd_trace_direct_sample(scene, view, primary, traced, rgb, rays, first_hit, first_normal);
+        kd_trace_direct_sample(scene, view, primary, traced, occluded, rgb, rays, first_hit,
+                               first_normal);
         return;
     }
     KdPendingRay stack[KDRAY_MAX_BOUNCES + 1];
@@ -299,9 +334,11 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
         /* Emission and direct light on the part of the surface that is not dielectric. */
         KDRAY_GLOBAL const KdMaterial* m = scene->materials + scene->material_ids[hit.prim];
         kd_f32 p[3], direct[3] = {0.0f, 0.0f, 0.0f};
-        for (int a = 0; a < 3; ++a) p[a] = r.ray.org[a] + hit.t * r.ray.dir[a];
+        kd_hit_point(&r.ray, hit.t, p);
         const kd_f32 surface = 1.0f - m->transmit_fraction;
-        if (surface > 0.0f) kd_direct_light(scene, view, m, p, n, r.ray.dir, direct, rays);
+        if (surface > 0.0f)
+            kd_direct_light(scene, view, m, p, n, r.ray.dir, r.kind == 0u ? occluded : 0, direct,
+                            rays);
         for (int c = 0; c < 3; ++c) rgb[c] += r.weight[c] * (m->emission[c] + surface * direct[c]);
         if (r.depth >= view->max_depth) continue;
 
@@ -368,9 +405,11 @@ KDRAY_HOT_INLINE KdRay kd_primary_ray(const KdView* view, kd_u32 x, kd_u32 y, kd
 
 /* One pixel: spp samples, their mean colour, and the centre ray's hit for the AOV. `traced`,
  * when not 0, holds the hits of the pixel's primary rays, already traced: the hit of ray r at
- * traced[r * traced_stride]. */
+ * traced[r * traced_stride]; `occluded`, when not 0, the blocked shadow rays from those hits
+ * (kd_direct_light) at the same places. */
 KDRAY_HOT_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView* view, kd_u32 x,
                                          kd_u32 y, KDRAY_GLOBAL const KdHit* traced,
+                                         KDRAY_GLOBAL const kd_u32* occluded,
                                          kd_u32 traced_stride) {
     KdPixel out;
     kd_set3(out.rgb, 0.0f, 0.0f, 0.0f);
@@ -403,8 +442,9 @@ KDRAY_HOT_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView*
             for (int c = 0; c < 3; ++c) out.rgb[c] += view->background[c];
             continue;
         }
-        kd_trace_sample(scene, view, kd_primary_ray(view, x, y, s), traced ? &hit : 0, rgb,
-                        &out.rays, view->spp == 1u ? &out.centre_hit : 0, out.normal);
+        kd_trace_sample(scene, view, kd_primary_ray(view, x, y, s), traced ? &hit : 0,
+                        occluded ? occluded + s * traced_stride : 0, rgb, &out.rays,
+                        view->spp == 1u ? &out.centre_hit : 0, out.normal);
         for (int c = 0; c < 3; ++c) out.rgb[c] += rgb[c];
     }
     for (int c = 0; c < 3; ++c) out.rgb[c] /= (kd_f32)view->spp;

@@ -130,16 +130,21 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_EFFECT_REFRACTION 4u
 
 /* What kd_render_pixels reads and writes besides the image and the centre hits (its `outputs`
- * argument): the primary rays' hits come traced already (by kd_trace_camera_packets), and the
- * centre hits' normals are wanted. Per-pixel ray counts are written exactly when the kernel was
- * built with some effect: without any, a pixel casts its primary rays and nothing else. */
+ * argument): the primary rays' hits come traced already (by kd_trace_camera_packets), so do the
+ * shadow rays from them (by kd_trace_shadow_packets), and the centre hits' normals are wanted.
+ * Per-pixel ray counts are written exactly when the kernel was built with some effect: without
+ * any, a pixel casts its primary rays and nothing else. */
 #define KDRAY_RENDER_TRACED_PRIMARY 1u
 #define KDRAY_RENDER_NORMALS 2u
+#define KDRAY_RENDER_TRACED_SHADOWS 4u
 
 /* kd_trace_camera_packets traces the primary rays of tiles of KDRAY_PACKET_TILE x
- * KDRAY_PACKET_TILE pixels, one work-item each, as one packet: the 16 lanes of a float16. */
+ * KDRAY_PACKET_TILE pixels, one work-item each, as one packet: the 16 lanes of a float16;
+ * kd_trace_shadow_packets the shadow rays from their hits, a packet per light, for frames of at
+ * most KDRAY_PACKET_SHADOW_LIGHTS lights (a bit each per primary hit). */
 #define KDRAY_PACKET_TILE 4
 #define KDRAY_PACKET_SIZE (KDRAY_PACKET_TILE * KDRAY_PACKET_TILE)
+#define KDRAY_PACKET_SHADOW_LIGHTS 32u
 
 /* KdMaterial flags. */
 #define KDRAY_MATERIAL_MIRROR 1u     /* ideal mirror reflection weighted by specular (illum 3, 5) */

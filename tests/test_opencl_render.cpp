@@ -50,6 +50,15 @@ double rgb_rmse(const Image& a, const Image& b) {
     return std::sqrt(sum / double(a.rgb.size()));
 }
 
+/// The largest difference of one channel of one pixel: a shadow ray answered wrongly changes a
+/// pixel by its light's whole share, which an image-wide RMSE can average away.
+double rgb_max_difference(const Image& a, const Image& b) {
+    double worst = 0;
+    for (std::size_t i = 0; i < a.rgb.size(); ++i)
+        worst = std::max(worst, double(std::fabs(a.rgb[i] - b.rgb[i])));
+    return worst;
+}
+
 }  // namespace
 
 TEST_CASE("opencl render: centre hits equal brute force and the reference on the hard scenes") {
@@ -203,6 +212,7 @@ void check_packets(const Scene& scene, const KdTree& tree, const RenderInputs& b
         CHECK(device.rays.primary == host.rays.primary);
         CHECK(device.rays.shadow == host.rays.shadow);
         CHECK(rgb_rmse(device.image, host.image) < 1e-4);
+        CHECK(rgb_max_difference(device.image, host.image) < 1e-3);
     }
 }
 
@@ -235,6 +245,38 @@ TEST_CASE("opencl render: packets of primary rays give the reference's hits bit 
         const RenderInputs inputs = prepare_render(scene, settings, skew_camera(scene), 0);
         REQUIRE(inputs.effects.bits() == KDRAY_EFFECT_SHADOWS);
         check_packets(scene, tree, inputs);
+    }
+    SUBCASE("lights among the cubes: most shadow rays blocked, as packets of shadow rays") {
+        // Point lights inside a lattice of cubes and a directional light from outside: the cubes
+        // block most shadow rays, and a wrong answer shows as a pixel off by a light's share.
+        const Scene scene = test::cube_lattice(4);
+        const KdTree tree = build_reference(scene);
+        const Aabb b = scene.bounds();
+        const Vec3 size = b.hi - b.lo;
+        for (int spp : {1, 3}) {
+            CAPTURE(spp);
+            RenderSettings settings = small_settings(29, 21);
+            settings.spp = spp;
+            settings.lights.push_back(
+                Light{Light::Type::point, b.lo + size * 0.51f, {}, {2, 2, 2}});
+            settings.lights.push_back(
+                Light{Light::Type::point, b.lo + size * Vec3{0.2f, 0.8f, 0.37f}, {}, {1, 2, 1}});
+            settings.lights.push_back(
+                Light{Light::Type::directional, {}, Vec3{-0.3f, -1.0f, -0.2f}, {0.5f, 0.5f, 0.5f}});
+            check_packets(scene, tree, prepare_render(scene, settings, skew_camera(scene), 5));
+        }
+    }
+    SUBCASE("more lights than a mask holds: shadow rays one at a time, the same image") {
+        const Scene scene = test::random_triangles(500, 47);
+        const KdTree tree = build_reference(scene);
+        RenderSettings settings = small_settings(17, 13);
+        const Aabb b = scene.bounds();
+        for (kd_u32 i = 0; i <= KDRAY_PACKET_SHADOW_LIGHTS; ++i) {
+            const float f = float(i) / float(KDRAY_PACKET_SHADOW_LIGHTS);
+            settings.lights.push_back(Light{
+                Light::Type::point, b.lo + (b.hi - b.lo) * Vec3{f, 1.3f, 1.0f - f}, {}, {1, 1, 1}});
+        }
+        check_packets(scene, tree, prepare_render(scene, settings, skew_camera(scene), 0));
     }
 }
 

@@ -184,11 +184,13 @@ KDRAY_HOT_INLINE void kd_packet_setup(const float* bounds, const KdPacketRays* r
 }
 
 /* Nearest hits of the packet's rays (lanes not valid miss), each as kd_trace_closest gives it for
- * the ray alone. */
+ * the ray alone; with any_hit (a constant at each call), a hit wherever a lane's walk finds its
+ * first: the lanes that hit are exactly those kd_trace_occluded finds blocked, since until then
+ * each lane tests what the scalar walk tests. */
 KDRAY_HOT_INLINE void kd_trace_packet(__global const KdNode* nodes,
                                       __global const kd_u32* leaf_indices,
                                       __global const float* triangles, const float* bounds,
-                                      const KdPacketRays* rays, KdHit* hits) {
+                                      const KdPacketRays* rays, const int any_hit, KdHit* hits) {
     KdPacket p;
     float16 tmin, tmax;
     int16 active;
@@ -199,8 +201,10 @@ KDRAY_HOT_INLINE void kd_trace_packet(__global const KdNode* nodes,
     int top = 0;
     uint node_index = 0;
     for (;;) {
-        /* A lane stops where its best hit lies before the node (kd_trace's test). */
+        /* A lane stops where its best hit lies before the node (kd_trace's test), or at any
+         * hit for any_hit. */
         active &= ~(best.t < tmin);
+        if (any_hit) active &= best.prim == (uint16)(KDRAY_NO_HIT);
         if (KDRAY_PACKET_ANY(active)) {
             const KdNode node = nodes[node_index];
             if (!kd_node_is_leaf(node)) {

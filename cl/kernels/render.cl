@@ -86,7 +86,7 @@ __kernel void kd_trace_camera_packets(__global const KdNode* nodes,
     const int16 valid = (x < v.width) & (row < rows);
     const KdPacketRays rays = kd_primary_packet(&v, x, first_row + row, r, valid);
     KdHit out[KDRAY_PACKET_SIZE];
-    kd_trace_packet(nodes, leaf_indices, triangles, box, &rays, out);
+    kd_trace_packet(nodes, leaf_indices, triangles, box, &rays, 0, out);
     __global KdHit* plane = hits + (size_t)r * rows * v.width;
     for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
         const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE);
@@ -94,6 +94,95 @@ __kernel void kd_trace_camera_packets(__global const KdNode* nodes,
         if (xi < v.width && ri < rows) plane[(size_t)ri * v.width + xi] = out[i];
     }
 }
+
+#if (KDRAY_COMPILED_EFFECTS & KDRAY_EFFECT_SHADOWS) != 0
+/* Work-item (tile x, tile y, primary ray r): the shadow rays from the hits of ray r of the tile's
+ * pixels (kd_trace_camera_packets' hits, laid out as it writes them) toward each light, a packet
+ * per light, into occluded (the same layout): bit i where light i's shadow ray is blocked. Each
+ * lane's shadow ray is the one kd_direct_light casts (the same shared functions), and its any-hit
+ * walk finds it blocked exactly when kd_trace_occluded does. Bits of rays kd_direct_light will
+ * not cast (a light behind the surface) stay 0 and are never read. At most
+ * KDRAY_PACKET_SHADOW_LIGHTS lights. */
+__kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
+                                      __global const kd_u32* leaf_indices,
+                                      __global const float* triangles,
+                                      __global const KdLight* lights, __global const float* bounds,
+                                      const KdView view, const kd_u32 first_row, const kd_u32 rows,
+                                      __global const KdHit* traced, __global kd_u32* occluded) {
+    const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE;
+    const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE;
+    const kd_u32 r = (kd_u32)get_global_id(2);
+    if (x0 >= view.width || row0 >= rows || r >= kd_primary_rays_per_pixel(&view)) return;
+    /* With spp > 1, ray spp is the AOV's centre ray, which nothing shades. */
+    if (view.spp > 1u && r == view.spp) return;
+    const KdView v = view;
+    const KdSceneView scene = kd_scene_view(nodes, leaf_indices, triangles, 0, 0, lights, bounds);
+    /* Per lane (pixel (x0 + i % 4, row0 + i / 4)): its hit's point and normal, as kd_trace_sample
+     * computes them. */
+    kd_f32 p[KDRAY_PACKET_SIZE][3], n[KDRAY_PACKET_SIZE][3];
+    int has_hit[KDRAY_PACKET_SIZE];
+    kd_u32 blocked[KDRAY_PACKET_SIZE];
+    size_t at[KDRAY_PACKET_SIZE];
+    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
+        const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE);
+        const kd_u32 ri = row0 + (kd_u32)(i / KDRAY_PACKET_TILE);
+        blocked[i] = 0u;
+        has_hit[i] = 0;
+        at[i] = (size_t)r * rows * v.width + (size_t)ri * v.width + xi;
+        if (xi >= v.width || ri >= rows) continue;
+        const KdHit hit = traced[at[i]];
+        if (hit.prim == KDRAY_NO_HIT) continue;
+        const KdRay primary = kd_primary_ray(&v, xi, first_row + ri, r);
+        kd_facing_normal(triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE, primary.dir,
+                         n[i]);
+        kd_hit_point(&primary, hit.t, p[i]);
+        has_hit[i] = 1;
+    }
+    float box[6];
+    for (int i = 0; i < 6; ++i) box[i] = bounds[i];
+    const kd_u32 light_count = kd_shining_lights(&v);
+    for (kd_u32 light = 0; light < light_count; ++light) {
+        float org[3][KDRAY_PACKET_SIZE], dir[3][KDRAY_PACKET_SIZE], tmax[KDRAY_PACKET_SIZE];
+        int valid[KDRAY_PACKET_SIZE];
+        int any_ray = 0;
+        for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
+            valid[i] = 0;
+            tmax[i] = 0.0f;
+            for (int a = 0; a < 3; ++a) org[a][i] = dir[a][i] = 1.0f;
+            if (!has_hit[i]) continue;
+            kd_f32 to_light[3], irradiance[3], distance;
+            kd_light_at(&scene, &v, light_count, light, p[i], to_light, irradiance, &distance);
+            if (kd_dot3(n[i], to_light) <= 0.0f) continue;
+            const KdRay shadow = kd_shadow_ray(&v, p[i], n[i], to_light, distance);
+            for (int a = 0; a < 3; ++a) {
+                org[a][i] = shadow.org[a];
+                dir[a][i] = shadow.dir[a];
+            }
+            tmax[i] = shadow.tmax;
+            valid[i] = -1;
+            any_ray = 1;
+        }
+        if (!any_ray) continue;
+        KdPacketRays rays;
+        for (int a = 0; a < 3; ++a) {
+            rays.org[a] = vload16(0, org[a]);
+            rays.dir[a] = vload16(0, dir[a]);
+        }
+        rays.tmin = (float16)(0.0f);
+        rays.tmax = vload16(0, tmax);
+        rays.valid = vload16(0, valid);
+        KdHit out[KDRAY_PACKET_SIZE];
+        kd_trace_packet(nodes, leaf_indices, triangles, box, &rays, 1, out);
+        for (int i = 0; i < KDRAY_PACKET_SIZE; ++i)
+            if (valid[i] && out[i].prim != KDRAY_NO_HIT) blocked[i] |= 1u << light;
+    }
+    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
+        const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE);
+        const kd_u32 ri = row0 + (kd_u32)(i / KDRAY_PACKET_TILE);
+        if (xi < v.width && ri < rows) occluded[at[i]] = blocked[i];
+    }
+}
+#endif
 
 /* The work-item of pixel (get_global_id(0), first_row + get_global_id(1)), for both pixel kernels
  * below. direct_only: the pixel's one sample, whose primary hit is in traced, shaded by
@@ -105,8 +194,8 @@ KDRAY_HOT_INLINE void kd_pixel_work_item(
     __global const KdMaterial* materials, __global const KdLight* lights,
     __global const float* bounds, const KdView* view, const kd_u32 first_row, const kd_u32 rows,
     __global float* rgb, __global KdHit* hits, __global float* normals,
-    __global KdRayCounts* ray_counts, __global const KdHit* traced, const kd_u32 outputs,
-    const int direct_only) {
+    __global KdRayCounts* ray_counts, __global const KdHit* traced, __global const kd_u32* occluded,
+    const kd_u32 outputs, const int direct_only) {
     const kd_u32 x = (kd_u32)get_global_id(0);
     const kd_u32 row = (kd_u32)get_global_id(1);
     if (x >= view->width || row >= rows) return;
@@ -114,16 +203,18 @@ KDRAY_HOT_INLINE void kd_pixel_work_item(
     const KdSceneView scene =
         kd_scene_view(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds);
     const size_t in_launch = (size_t)row * view->width + x;
+    __global const kd_u32* blocked =
+        (outputs & KDRAY_RENDER_TRACED_SHADOWS) ? occluded + in_launch : 0;
     KdPixel pixel;
     if (direct_only) {
         const KdHit hit = traced[in_launch];
         pixel.rays.primary = pixel.rays.shadow = pixel.rays.reflection = pixel.rays.refraction = 0u;
-        kd_trace_direct_sample(&scene, view, kd_primary_ray(view, x, y, 0u), &hit, pixel.rgb,
-                               &pixel.rays, &pixel.centre_hit, pixel.normal);
+        kd_trace_direct_sample(&scene, view, kd_primary_ray(view, x, y, 0u), &hit, blocked,
+                               pixel.rgb, &pixel.rays, &pixel.centre_hit, pixel.normal);
     } else {
         pixel = kd_render_pixel(&scene, view, x, y,
                                 (outputs & KDRAY_RENDER_TRACED_PRIMARY) ? traced + in_launch : 0,
-                                rows * view->width);
+                                blocked, rows * view->width);
     }
     const size_t i = (size_t)y * view->width + x;
     for (int c = 0; c < 3; ++c) rgb[3 * i + c] = pixel.rgb[c];
@@ -145,10 +236,11 @@ __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u
                                const kd_u32 first_row, const kd_u32 rows, __global float* rgb,
                                __global KdHit* hits, __global float* normals,
                                __global KdRayCounts* ray_counts, __global const KdHit* traced,
-                               const kd_u32 outputs) {
+                               __global const kd_u32* occluded, const kd_u32 outputs) {
     const KdView v = view;
     kd_pixel_work_item(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds, &v,
-                       first_row, rows, rgb, hits, normals, ray_counts, traced, outputs, 0);
+                       first_row, rows, rgb, hits, normals, ray_counts, traced, occluded, outputs,
+                       0);
 }
 
 /* kd_render_pixels for spp 1 with the primary hits traced, in a kernel without reflection and
@@ -159,8 +251,10 @@ __kernel void kd_shade_traced_pixels(
     __global const KdMaterial* materials, __global const KdLight* lights,
     __global const float* bounds, const KdView view, const kd_u32 first_row, const kd_u32 rows,
     __global float* rgb, __global KdHit* hits, __global float* normals,
-    __global KdRayCounts* ray_counts, __global const KdHit* traced, const kd_u32 outputs) {
+    __global KdRayCounts* ray_counts, __global const KdHit* traced, __global const kd_u32* occluded,
+    const kd_u32 outputs) {
     const KdView v = view;
     kd_pixel_work_item(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds, &v,
-                       first_row, rows, rgb, hits, normals, ray_counts, traced, outputs, 1);
+                       first_row, rows, rgb, hits, normals, ray_counts, traced, occluded, outputs,
+                       1);
 }
