@@ -5,6 +5,8 @@
  *
  *   kd_trace_camera_packets  (CPU devices) the primary rays of 4x4 pixel tiles as packets of 16
  *                            (packet_traverse.cl), their hits into a buffer
+ *   kd_trace_shadow_packets  (CPU devices, frames with lights) the shadow rays from those hits,
+ *                            a packet per tile and light, a bit per blocked ray into a buffer
  *   kd_render_pixels         one work-item per pixel: its samples, shaded; the primary hits come
  *                            from that buffer when there is one, else they are traced here
  *   kd_shade_traced_pixels   one work-item per pixel of one sample whose hit is in that buffer,
