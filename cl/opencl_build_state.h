@@ -22,7 +22,7 @@ constexpr cl_uint kSmallRootAxis = 4;
 /// The builder's kernels, from programs built once per device and options (program cache).
 struct Kernels {
     cl::Kernel compute_aabbs, bin_large, split_large, classify, count_large, emit_large, distribute;
-    cl::Kernel split_masks, build_subtrees;
+    cl::Kernel split_masks, build_subtrees, second_pass_records;
     cl::Kernel size_subtrees, place_subtrees, write_nodes, write_small;
 
     /// large_split_bins: BuildParams::large_split_bins, compiled into the large stage's program.
@@ -39,10 +39,14 @@ struct SmallRoots {
 /// consecutive roots'). A batch's records stay until the output stage has moved them into place.
 struct SmallBatch {
     cl_uint root_begin = 0, roots = 0, ref_begin = 0, refs = 0;
-    // [0] the first pass's records, budget_scale[0] * (n + 1) per root of n references; [1] the
-    // second's, for the subtrees that outgrew the first (empty when none did).
+    // [0] the first pass's records, first_scale * (n + 1) per root of n references; [1] the
+    // second's, exactly the node counts of the subtrees that outgrew the first (empty when none
+    // did).
     DeviceArray records[2];
-    cl_uint budget_scale[2] = {0, 0};
+    cl_uint first_scale = 0;
+    // Where each root's second-pass records start (roots entries; read only for those that
+    // outgrew the first pass).
+    DeviceArray second_offset;
 };
 
 /// Everything one build holds on the device between its stages.

@@ -75,6 +75,7 @@ Kernels::Kernels(const ClDevice& device, int large_split_bins) {
     distribute = make_kernel(large, "kd_distribute_chunks");
     split_masks = make_kernel(small, "kd_compute_split_masks");
     build_subtrees = make_kernel(small, "kd_build_small_subtrees");
+    second_pass_records = make_kernel(small, "kd_second_pass_records");
     size_subtrees = make_kernel(output, "kd_size_subtrees");
     place_subtrees = make_kernel(output, "kd_place_subtrees");
     write_nodes = make_kernel(output, "kd_write_nodes");

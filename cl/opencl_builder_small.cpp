@@ -87,37 +87,50 @@ void run_small_stage(Build& b, int max_depth, cl_uint first_scale, std::size_t b
                        b.root_ref_start.buffer(), b.root_ref_count.buffer(), side_masks.buffer());
 
         /* Every subtree, into records set aside per root; the few subtrees that outgrow theirs
-         * are only counted, and built again into records sized by the largest (second pass). */
+         * are only counted, and built again into exactly as many records (second pass). */
         with_cl_context("clearing the small stage totals",
                         [&] { q.enqueueFillBuffer(totals.buffer(), cl_uint(0), 0, 3 * 4); });
         std::array<cl_uint, 3> total{};
-        auto build_subtrees = [&](cl_uint scale, cl_uint first_scale, const DeviceArray& records) {
+        auto build_subtrees = [&](cl_uint second_pass, const DeviceArray& second_offset,
+                                  const DeviceArray& records) {
             enqueue_kernel(
                 q, k.build_subtrees, batch.roots, batch.root_begin, batch.roots, batch.ref_begin,
                 b.small_first.box.buffer(), b.small_first.depth.buffer(), b.root_ref_start.buffer(),
                 b.root_ref_count.buffer(), b.small_ref_box.buffer(), side_masks.buffer(),
                 b.small_ref_tri.buffer(), b.triangle_data.buffer(),
                 cl_float(b.params.costs.traversal), cl_float(b.params.costs.intersection),
-                cl_float(b.params.empty_bonus), cl_uint(max_depth), scale, first_scale,
-                records.buffer(), b.subtree_node_count.buffer(), b.subtree_leaf_refs.buffer(),
-                totals.buffer());
+                cl_float(b.params.empty_bonus), cl_uint(max_depth), first_scale, second_pass,
+                second_offset.buffer(), records.buffer(), b.subtree_node_count.buffer(),
+                b.subtree_leaf_refs.buffer(), totals.buffer());
         };
         const std::size_t budget_units = std::size_t(batch.refs) + batch.roots;
-        batch.budget_scale[0] = batch.budget_scale[1] = first_scale;
+        batch.first_scale = first_scale;
         batch.records[0] =
             b.allocate(checked_u32(first_scale * budget_units, "small node records") * kRecordBytes,
                        "small node records");
-        build_subtrees(first_scale, 0, batch.records[0]);
+        // The first pass reads no offsets; its argument is the totals buffer.
+        build_subtrees(0, totals, batch.records[0]);
         with_cl_context("reading the small stage totals", [&] {
             q.enqueueReadBuffer(totals.buffer(), CL_TRUE, 0, 3 * 4, total.data());
         });
         if (total[1] > first_scale) {
-            batch.budget_scale[1] = total[1];
-            batch.records[1] =
-                b.allocate(checked_u32(std::size_t(total[1]) * budget_units, "small node records") *
-                               kRecordBytes,
-                           "small node records (second pass)");
-            build_subtrees(total[1], first_scale, batch.records[1]);
+            // Each outgrown subtree's node count, scanned into its place (one entry more: the
+            // total).
+            batch.second_offset =
+                b.allocate((std::size_t(batch.roots) + 1) * 4, "second-pass record offsets");
+            with_cl_context("clearing the second-pass record offsets", [&] {
+                q.enqueueFillBuffer(batch.second_offset.buffer(), cl_uint(0),
+                                    std::size_t(batch.roots) * 4, 4);
+            });
+            enqueue_kernel(q, k.second_pass_records, batch.roots, batch.root_begin, batch.roots,
+                           first_scale, b.root_ref_count.buffer(), b.subtree_node_count.buffer(),
+                           batch.second_offset.buffer());
+            b.primitives.exclusive_scan(batch.second_offset.buffer(), batch.second_offset.buffer(),
+                                        std::size_t(batch.roots) + 1);
+            const cl_uint second_records = read_uint(q, batch.second_offset, batch.roots);
+            batch.records[1] = b.allocate(std::size_t(second_records) * kRecordBytes,
+                                          "small node records (second pass)");
+            build_subtrees(1, batch.second_offset, batch.records[1]);
         }
         b.small_nodes = checked_u32(std::uint64_t(b.small_nodes) + total[0], "small nodes");
         b.small_levels = std::max(b.small_levels, int(total[2]));
@@ -158,13 +171,16 @@ DeviceArray write_preorder(Build& b, DeviceArray& leaf_indices, cl_uint& leaf_in
                    position.buffer(), leaf_position.buffer(), b.leaf_store.buffer(), nodes.buffer(),
                    leaf_indices.buffer());
     for (const SmallBatch& batch : b.small_batches) {
-        const cl::Buffer& second = batch.records[batch.records[1].bytes() ? 1 : 0].buffer();
+        // Without a second pass no root reads its records or offsets: any buffer will do.
+        const bool second_pass = batch.records[1].bytes() != 0;
+        const cl::Buffer& second = batch.records[second_pass ? 1 : 0].buffer();
+        const cl::Buffer& offsets = (second_pass ? batch.second_offset : batch.records[0]).buffer();
         enqueue_kernel(q, k.write_small, batch.roots, batch.root_begin, batch.roots,
                        batch.ref_begin, b.small_first.id.buffer(), b.root_ref_start.buffer(),
-                       b.root_ref_count.buffer(), batch.budget_scale[0], batch.records[0].buffer(),
-                       batch.budget_scale[1], second, b.subtree_node_count.buffer(),
-                       position.buffer(), leaf_position.buffer(), b.small_ref_tri.buffer(),
-                       nodes.buffer(), leaf_indices.buffer());
+                       b.root_ref_count.buffer(), batch.first_scale, batch.records[0].buffer(),
+                       second, offsets, b.subtree_node_count.buffer(), position.buffer(),
+                       leaf_position.buffer(), b.small_ref_tri.buffer(), nodes.buffer(),
+                       leaf_indices.buffer());
     }
     return nodes;
 }

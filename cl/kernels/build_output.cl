@@ -71,21 +71,21 @@ __kernel void kd_write_nodes(uint count, __global const KdBuildNode* records,
  * the root and its first leaf reference landed. A leaf's mask names its small root's triangles.
  * One launch per batch of small roots (roots root_begin.., references ref_begin..), whose
  * records are laid out as kd_build_small_subtrees wrote them; subtrees that outgrew the first
- * pass's records (first_scale per reference) are the second's. */
+ * pass's records (first_scale per reference) are the second's, from second_offset on. */
 __kernel void kd_write_small_subtrees(
     uint root_begin, uint roots, uint ref_begin, __global const uint* root_node_id,
     __global const uint* root_ref_start, __global const uint* root_ref_count, uint first_scale,
-    __global const uint4* first_nodes, uint second_scale, __global const uint4* second_nodes,
-    __global const uint* subtree_node_count, __global const uint* position,
-    __global const uint* leaf_position, __global const uint* small_ref_tri, __global KdNode* nodes,
-    __global uint* leaf_indices) {
+    __global const uint4* first_nodes, __global const uint4* second_nodes,
+    __global const uint* second_offset, __global const uint* subtree_node_count,
+    __global const uint* position, __global const uint* leaf_position,
+    __global const uint* small_ref_tri, __global KdNode* nodes, __global uint* leaf_indices) {
     if (get_global_id(0) >= roots) return;
     const uint q = root_begin + (uint)get_global_id(0);
     const uint start = root_ref_start[q], count = subtree_node_count[q];
     const size_t units = (start - ref_begin) + (q - root_begin);
     __global const uint4* in = count <= first_scale * (root_ref_count[q] + 1)
                                    ? first_nodes + (size_t)first_scale * units
-                                   : second_nodes + (size_t)second_scale * units;
+                                   : second_nodes + second_offset[q - root_begin];
     const uint at = position[root_node_id[q]], first = leaf_position[root_node_id[q]];
     for (uint j = 0; j < count; ++j) {
         const uint4 r = in[j];

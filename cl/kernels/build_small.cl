@@ -239,32 +239,36 @@ typedef struct KdPendingNode {
 
 /* Small-node stage (§4.2), one work-item per small root: split the root's subtree depth first,
  * writing its nodes in preorder (below child right after its parent, above child after the below
- * subtree, as the output layout wants) to the root's run of subtree_nodes, which holds
- * budget_scale * (count + 1) records for a root of count references, from budget_scale * (the
- * batch's references and roots before it) on (the record layout is in build_common.cl; leaf
- * offsets count from the subtree's first leaf reference). A node becomes a
- * leaf when no split beats C_i N, at the depth limit, or when its box has no area.
+ * subtree, as the output layout wants) to the root's run of subtree_nodes (the record layout is
+ * in build_common.cl; leaf offsets count from the subtree's first leaf reference). A node becomes
+ * a leaf when no split beats C_i N, at the depth limit, or when its box has no area.
  *
- * Outputs per root: its node and leaf reference counts. A subtree that outgrows its run is still
- * counted, only not written. totals (zeroed by the host): [0] the stage's node count, [1] the
- * smallest budget_scale that holds every subtree, [2] the most levels of one subtree. A second
- * pass (first_scale != 0, with a larger budget_scale and its own subtree_nodes) builds again only
- * the subtrees that outgrew the first pass's first_scale. */
+ * The first pass gives a root of count references first_scale * (count + 1) records, from
+ * first_scale * (the batch's references and roots before it) on. Outputs per root: its node and
+ * leaf reference counts; a subtree that outgrows its run is still counted, only not written.
+ * totals (zeroed by the host): [0] the stage's node count, [1] the smallest scale that holds
+ * every subtree, [2] the most levels of one subtree. The second pass (second_pass != 0) builds
+ * again only the subtrees that outgrew the first, each into exactly its counted records from
+ * second_offset[root - root_begin] on (kd_second_pass_records). */
 __kernel void kd_build_small_subtrees(
     uint root_begin, uint roots, uint ref_begin, __global const float* root_box,
     __global const uint* root_depth, __global const uint* root_ref_start,
     __global const uint* root_ref_count, __global const float* ref_box,
     __global const ulong* side_masks, __global const uint* ref_tri, __global const float* triangles,
     float cost_traversal, float cost_intersection, float empty_bonus, uint max_depth,
-    uint budget_scale, uint first_scale, __global uint4* subtree_nodes,
-    __global uint* subtree_node_count, __global uint* subtree_leaf_refs, __global uint* totals) {
+    uint first_scale, uint second_pass, __global const uint* second_offset,
+    __global uint4* subtree_nodes, __global uint* subtree_node_count,
+    __global uint* subtree_leaf_refs, __global uint* totals) {
     if (get_global_id(0) >= roots) return;
     const uint q = root_begin + (uint)get_global_id(0);
     const uint start = root_ref_start[q], count = root_ref_count[q];
-    if (first_scale != 0 && subtree_node_count[q] <= first_scale * (count + 1)) return;
-    const uint budget = budget_scale * (count + 1);
+    const uint first_budget = first_scale * (count + 1);
+    if (second_pass && subtree_node_count[q] <= first_budget) return;
+    const uint budget = second_pass ? subtree_node_count[q] : first_budget;
     __global uint4* out =
-        subtree_nodes + (size_t)budget_scale * ((start - ref_begin) + (q - root_begin));
+        second_pass
+            ? subtree_nodes + second_offset[q - root_begin]
+            : subtree_nodes + (size_t)first_scale * ((start - ref_begin) + (q - root_begin));
     __global const ulong* root_masks = side_masks + (size_t)(start - ref_begin) * 16;
     KdPendingNode stack[KDRAY_MAX_DEPTH];
     uint top = 0;
@@ -331,4 +335,17 @@ __kernel void kd_build_small_subtrees(
     atomic_add(&totals[0], written);
     atomic_max(&totals[1], (written + count) / (count + 1));
     atomic_max(&totals[2], deepest - root_depth[q] + 1);
+}
+
+/* The second pass's records of a batch's roots (roots root_begin..): records[g] the node count of
+ * root root_begin + g when its subtree outgrew the first pass's first_scale * (count + 1), else
+ * 0; their exclusive scan places each subtree (kd_build_small_subtrees). */
+__kernel void kd_second_pass_records(uint root_begin, uint roots, uint first_scale,
+                                     __global const uint* root_ref_count,
+                                     __global const uint* subtree_node_count,
+                                     __global uint* records) {
+    const uint g = get_global_id(0);
+    if (g >= roots) return;
+    const uint q = root_begin + g, nodes = subtree_node_count[q];
+    records[g] = nodes > first_scale * (root_ref_count[q] + 1) ? nodes : 0u;
 }
