@@ -140,7 +140,10 @@ void enqueue_packets(ClDevice& device, cl::Kernel& kernel, const KdView& view,
                      std::size_t first_row, std::size_t rows, cl_uint first_row_arg = 5) {
     kernel.setArg(first_row_arg, kd_u32(first_row));
     kernel.setArg(first_row_arg + 1, kd_u32(rows));
-    const std::size_t tiles_x = (view.width + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
+    // At least one tile: the warm-up's empty view would make a global size of 0, which OpenCL
+    // 1.2 rejects (each work-item returns at once past the image).
+    const std::size_t tiles_x =
+        std::max<std::size_t>(1, (view.width + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE);
     const std::size_t tiles_y = (rows + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
     device.queue().enqueueNDRangeKernel(
         kernel, cl::NullRange,

@@ -186,9 +186,9 @@ typedef struct KdLight {
  *   origin, forward, right, up: camera position and unit basis; tan_half_fov = tan(fov_y / 2);
  *   aspect = width / height; background colour; spp samples per pixel; max_depth <=
  *   KDRAY_MAX_BOUNCES; light_count lights, which shine only with KDRAY_EFFECT_SHADOWS (without:
- *   a headlight along the view direction, no shadow rays); effects KDRAY_EFFECT_* bits; seed for
- * the sample jitter; ray_epsilon: how far secondary rays start off the surface (scaled to the scene
- * by the host); pad: 0. */
+ *   a headlight along the view direction, no shadow rays); effects KDRAY_EFFECT_* bits; seed
+ *   for the sample jitter; ray_epsilon: how far secondary rays start off the surface (scaled to
+ *   the scene by the host); pad: 0. */
 typedef struct KdView {
     kd_f32 origin[3];
     kd_f32 tan_half_fov;

@@ -199,6 +199,7 @@ bool same_bits(const KdHit& a, const KdHit& b) {
 /// and its image against the reference's.
 void check_packets(const Scene& scene, const KdTree& tree, const RenderInputs& base) {
     const FrameResult host = render_reference(tree, scene, base, 1);
+    std::vector<Image> images;
     for (RenderInputs::Packets packets : {RenderInputs::Packets::On, RenderInputs::Packets::Off}) {
         CAPTURE(packets == RenderInputs::Packets::On);
         RenderInputs inputs = base;
@@ -213,7 +214,13 @@ void check_packets(const Scene& scene, const KdTree& tree, const RenderInputs& b
         CHECK(device.rays.shadow == host.rays.shadow);
         CHECK(rgb_rmse(device.image, host.image) < 1e-4);
         CHECK(rgb_max_difference(device.image, host.image) < 1e-3);
+        images.push_back(device.image);
     }
+    // On the device the two paths run the same shading on the same hits and shadow answers: the
+    // images are the same bit for bit.
+    REQUIRE(images[0].rgb.size() == images[1].rgb.size());
+    CHECK(std::memcmp(images[0].rgb.data(), images[1].rgb.data(),
+                      images[0].rgb.size() * sizeof(float)) == 0);
 }
 
 }  // namespace
@@ -265,6 +272,18 @@ TEST_CASE("opencl render: packets of primary rays give the reference's hits bit 
                 Light{Light::Type::directional, {}, Vec3{-0.3f, -1.0f, -0.2f}, {0.5f, 0.5f, 0.5f}});
             check_packets(scene, tree, prepare_render(scene, settings, skew_camera(scene), 5));
         }
+    }
+    SUBCASE("several launches: rows past the first launch, at spp 3 under lights") {
+        // A launch holds 2^18 primary rays' hits: at 2048 pixels a row and 4 rays a pixel, 32
+        // rows, so 40 rows take two launches, and the second's first_row offsets every buffer.
+        const Scene scene = test::cube_lattice(3);
+        const KdTree tree = build_reference(scene);
+        const Aabb b = scene.bounds();
+        RenderSettings settings = small_settings(2048, 40);
+        settings.spp = 3;
+        settings.lights.push_back(
+            Light{Light::Type::point, b.lo + (b.hi - b.lo) * 0.49f, {}, {2, 2, 2}});
+        check_packets(scene, tree, prepare_render(scene, settings, skew_camera(scene), 9));
     }
     SUBCASE("more lights than a mask holds: shadow rays one at a time, the same image") {
         const Scene scene = test::random_triangles(500, 47);

@@ -14,7 +14,7 @@
 #include "cl/kernels/packet_traverse.cl"
 #include "core/kd_render.h"
 
-/* The scene view both kernels read. */
+/* The scene view the kernels read. */
 inline KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
                                  __global const float* triangles,
                                  __global const kd_u32* material_ids,
