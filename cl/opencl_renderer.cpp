@@ -119,8 +119,8 @@ void set_packet_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& v
                     kd_u32(0), b.traced);
 }
 void set_shadow_packet_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& view) {
-    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.lights, b.bounds, view,
-                    kd_u32(0), kd_u32(0), b.traced, b.occluded);
+    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.bounds, view, kd_u32(0),
+                    kd_u32(0), b.lights, b.traced, b.occluded);
 }
 
 /// The launch of `rows` image rows from `first_row`, in tiles.
@@ -134,12 +134,12 @@ void enqueue_rows(ClDevice& device, cl::Kernel& kernel, std::size_t width, std::
         cl::NDRange(kTileWidth, kTileHeight));
 }
 
-/// The packet launch (kd_trace_camera_packets, or kd_trace_shadow_packets whose first_row is
-/// argument `first_row_arg`) of `rows` image rows from `first_row`.
+/// The packet launch (kd_trace_camera_packets or kd_trace_shadow_packets, whose arguments 5 and 6
+/// are both first_row and rows) of `rows` image rows from `first_row`.
 void enqueue_packets(ClDevice& device, cl::Kernel& kernel, const KdView& view,
-                     std::size_t first_row, std::size_t rows, cl_uint first_row_arg = 5) {
-    kernel.setArg(first_row_arg, kd_u32(first_row));
-    kernel.setArg(first_row_arg + 1, kd_u32(rows));
+                     std::size_t first_row, std::size_t rows) {
+    kernel.setArg(5, kd_u32(first_row));
+    kernel.setArg(6, kd_u32(rows));
     // At least one tile: the warm-up's empty view would make a global size of 0, which OpenCL
     // 1.2 rejects (each work-item returns at once past the image).
     const std::size_t tiles_x =
@@ -177,7 +177,7 @@ void prepare_opencl_renderer(ClDevice& device, const RenderInputs& inputs) {
             cl::Kernel shadow =
                 render_kernel(device, effects, intersect, "kd_trace_shadow_packets");
             set_shadow_packet_args(shadow, buffers, view);
-            enqueue_packets(device, shadow, view, 0, 1, 6);
+            enqueue_packets(device, shadow, view, 0, 1);
         }
         device.queue().finish();
     });
@@ -242,7 +242,7 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
         for (std::size_t row = 0; row < view.height; row += step) {
             const std::size_t rows = std::min<std::size_t>(step, view.height - row);
             if (packets) enqueue_packets(device, packet, view, row, rows);
-            if (shadow_packets) enqueue_packets(device, shadow, view, row, rows, 6);
+            if (shadow_packets) enqueue_packets(device, shadow, view, row, rows);
             enqueue_rows(device, kernel, view.width, row, rows);
         }
     });

@@ -104,13 +104,14 @@ __kernel void kd_trace_camera_packets(__global const KdNode* nodes,
  * lane's shadow ray is the one kd_direct_light casts (the same shared functions), and its any-hit
  * walk finds it blocked exactly when kd_trace_occluded does. Bits of rays kd_direct_light will
  * not cast (a light behind the surface) stay 0 and are never read. At most
- * KDRAY_PACKET_SHADOW_LIGHTS lights. */
+ * KDRAY_PACKET_SHADOW_LIGHTS lights. Its first arguments are kd_trace_camera_packets', so one
+ * launch helper serves both. */
 __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
                                       __global const kd_u32* leaf_indices,
-                                      __global const float* triangles,
-                                      __global const KdLight* lights, __global const float* bounds,
+                                      __global const float* triangles, __global const float* bounds,
                                       const KdView view, const kd_u32 first_row, const kd_u32 rows,
-                                      __global const KdHit* traced, __global kd_u32* occluded) {
+                                      __global const KdLight* lights, __global const KdHit* traced,
+                                      __global kd_u32* occluded) {
     const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE;
     const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE;
     const kd_u32 r = (kd_u32)get_global_id(2);
@@ -122,7 +123,7 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
     /* Per lane (pixel (x0 + i % 4, row0 + i / 4)): its hit's point and normal, as kd_trace_sample
      * computes them. */
     kd_f32 p[KDRAY_PACKET_SIZE][3], n[KDRAY_PACKET_SIZE][3];
-    int has_hit[KDRAY_PACKET_SIZE];
+    int inside[KDRAY_PACKET_SIZE], has_hit[KDRAY_PACKET_SIZE];
     kd_u32 blocked[KDRAY_PACKET_SIZE];
     size_t at[KDRAY_PACKET_SIZE];
     for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
@@ -131,7 +132,8 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
         blocked[i] = 0u;
         has_hit[i] = 0;
         at[i] = (size_t)r * rows * v.width + (size_t)ri * v.width + xi;
-        if (xi >= v.width || ri >= rows) continue;
+        inside[i] = xi < v.width && ri < rows;
+        if (!inside[i]) continue;
         const KdHit hit = traced[at[i]];
         if (hit.prim == KDRAY_NO_HIT) continue;
         const KdRay primary = kd_primary_ray(&v, xi, first_row + ri, r);
@@ -178,11 +180,8 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
         for (int i = 0; i < KDRAY_PACKET_SIZE; ++i)
             if (valid[i] && out[i].prim != KDRAY_NO_HIT) blocked[i] |= 1u << light;
     }
-    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
-        const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE);
-        const kd_u32 ri = row0 + (kd_u32)(i / KDRAY_PACKET_TILE);
-        if (xi < v.width && ri < rows) occluded[at[i]] = blocked[i];
-    }
+    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i)
+        if (inside[i]) occluded[at[i]] = blocked[i];
 }
 #endif
 
