@@ -34,6 +34,22 @@ Scene random_triangles(int count, std::uint32_t seed, float extent, float size, 
     return make_scene(std::move(tris), "random");
 }
 
+Scene long_slivers(int count, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> pos(0.0f, 1.0f);
+    std::normal_distribution<float> normal;
+    auto direction = [&] {
+        const Vec3 d{normal(rng), normal(rng), normal(rng)};
+        return d * (1.0f / length(d));
+    };
+    std::vector<float> tris;
+    for (int i = 0; i < count; ++i) {
+        const Vec3 c{pos(rng), pos(rng), pos(rng)}, along = direction(), across = direction();
+        push_triangle(tris, c - along * 0.5f, c + along * 0.5f, c + across * 0.02f);
+    }
+    return make_scene(std::move(tris), "long_slivers");
+}
+
 Scene planar_triangles(int count, std::uint32_t seed) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> pos(0.0f, 1.0f), jitter(-0.05f, 0.05f);

@@ -10,7 +10,9 @@
  * work-item builds a root's whole subtree in one launch: the root's masks (at most 64 references
  * of 128 bytes) stay in its cache across the subtree's levels instead of being read again by a new
  * launch per level, and the ~20 launches, scans and read-backs of the levels are gone. The trees
- * are the same: each node gets the same SAH decision from the same inputs.
+ * are the same: each node gets the same SAH decision from the same inputs. One departure from the
+ * paper: a node of at most KDRAY_RECLIP_REFS triangles re-clips them to its box and prices its
+ * subtree with masks of its own (re-clipping, below).
  *
  * Candidates are the boundaries of the root's (clipped) triangle boxes: candidate 6*ref + 2*axis
  * + side lies at the box's lo (side 0) or hi (side 1) on that axis. side_masks holds 16 masks per
@@ -52,6 +54,15 @@ inline int8 kd_planar_above_lanes(float8 pos) {
     return odd & (pos == pos.s00224466);
 }
 
+/* The sides of one candidate plane per lane (at pos) that a box (lo, hi lanes) lies on, -1 where
+ * true; planar_above: the lanes whose planar triangles go above (kd_compute_split_masks). */
+inline void kd_candidate_sides(float8 pos, int8 planar_above, float8 lo, float8 hi, int8* below,
+                               int8* above) {
+    const int8 crosses_up = hi > pos;
+    *above = crosses_up | (planar_above & (lo >= pos));
+    *below = (lo < pos) | (~planar_above & ~crosses_up);
+}
+
 /* Split candidates (§4.2, "small node preprocessing"): for each candidate plane the set of the
  * root's triangles below it and the set above it, by the same rule as every split (kd_classify
  * with the planar side below: below when lo < plane or when not hi > plane, above when
@@ -81,9 +92,8 @@ __kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const f
         for (uint j = 32u * part; j < end; ++j) {
             float8 lo, hi;
             kd_box_lanes(kd_load_box(ref_box, start + j), &lo, &hi);
-            const int8 crosses_up = hi > pos; /* -1 where true */
-            const int8 is_above = crosses_up | (planar_above & (lo >= pos));
-            const int8 is_below = (lo < pos) | (~planar_above & ~crosses_up);
+            int8 is_below, is_above;
+            kd_candidate_sides(pos, planar_above, lo, hi, &is_below, &is_above);
             const uint bit = 1u << (j & 31u);
             below_bits |= as_uint8(is_below) & bit;
             above_bits |= as_uint8(is_above) & bit;
@@ -122,72 +132,102 @@ inline void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above, float
 /* The SAH split of one small node (§4.2): for every candidate of the node's triangles inside the
  * node's box, or on its faces as kd_candidate_children allows, SAH(x) = C_t + C_i (N_L SA_L +
  * N_R SA_R) / SA, the counts by popcount of the children's masks, scaled by (1 - empty_bonus)
- * when a side with some width is empty, as in the reference builder. Returns the cheapest
- * candidate (6 * ref + k), or KDRAY_NO_CANDIDATE when C_i N is no more than the best: the node
- * becomes a leaf.
+ * when a side with some width is empty, as in the reference builder. The search returns the
+ * cheapest candidate (6 * reference + lane), or KDRAY_NO_CANDIDATE when C_i N is no more than
+ * the best: the node becomes a leaf.
  *
  * Only the candidates of the node's own triangles (the set bits of its mask) are evaluated: the
- * SAH is piecewise linear between those boundaries, so its minimum lies on one of them. */
+ * SAH is piecewise linear between those boundaries, so its minimum lies on one of them. The six
+ * candidates of a triangle are the lanes of one float8 (lane k = 2 * axis + side, as in
+ * kd_compute_split_masks; lanes 6 and 7 unused): a scalar loop per candidate took 131 ms of CPU
+ * per kitchen build (perf), this one 115 ms. The search is split in three (start, price each
+ * reference, pick) because the references and their masks come from global memory for the small
+ * root's table and from private memory for a re-clipped node's (KdClippedRoot). */
 #define KDRAY_NO_CANDIDATE 0xFFFFFFFFu
 
-inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global const float* ref_box,
-                                __global const ulong* root_masks, float cost_traversal,
-                                float cost_intersection, float empty_bonus) {
-    /* Child area = 2 (cross + d * ring); the 2 and 1/area fold into one scale of the counts.
-     * The six candidates of a triangle are the lanes of one float8 (lane k = 2 * axis + side, as
-     * in kd_compute_split_masks; lanes 6 and 7 unused): a scalar loop per candidate took 131 ms
-     * of CPU per kitchen build (perf), this one 115 ms. */
-    const float cost_scale = cost_intersection * 2.0f / kd_box_area(box);
+typedef struct KdSplitSearch {
+    ulong8 node;
+    float8 lo, hi, cross, ring;
+    float cost_scale, cost_traversal, empty_bonus;
+    /* Per lane, the first cheapest candidate so far and its cost. */
+    float8 lane_cost;
+    uint8 lane_candidate;
+} KdSplitSearch;
+
+inline void kd_start_split_search(KdSplitSearch* s, KdBox box, ulong mask, float cost_traversal,
+                                  float cost_intersection, float empty_bonus) {
+    /* Child area = 2 (cross + d * ring); the 2 and 1/area fold into one scale of the counts. */
+    s->cost_scale = cost_intersection * 2.0f / kd_box_area(box);
+    s->cost_traversal = cost_traversal;
+    s->empty_bonus = empty_bonus;
     const float3 e = box.hi - box.lo;
-    float8 lo, hi;
-    kd_box_lanes(box, &lo, &hi);
-    const float8 cross =
-        (float8)(e.y * e.z, e.y * e.z, e.z * e.x, e.z * e.x, e.x * e.y, e.x * e.y, 0, 0);
-    const float8 ring =
-        (float8)(e.y + e.z, e.y + e.z, e.z + e.x, e.z + e.x, e.x + e.y, e.x + e.y, 0, 0);
-    const ulong8 node = (ulong8)(mask);
-    const uint8 lane_index = (uint8)(0, 1, 2, 3, 4, 5, 6, 7);
+    kd_box_lanes(box, &s->lo, &s->hi);
+    s->cross = (float8)(e.y * e.z, e.y * e.z, e.z * e.x, e.z * e.x, e.x * e.y, e.x * e.y, 0, 0);
+    s->ring = (float8)(e.y + e.z, e.y + e.z, e.z + e.x, e.z + e.x, e.x + e.y, e.x + e.y, 0, 0);
+    s->node = (ulong8)(mask);
     /* A candidate must beat the leaf, C_i N; NO_CANDIDATE is the largest index. */
-    float8 lane_cost = (float8)(cost_intersection * (float)popcount(mask));
-    uint8 lane_candidate = (uint8)(KDRAY_NO_CANDIDATE);
-    for (ulong rest = mask; rest != 0; rest &= rest - 1) {
-        const uint j = (uint)popcount((rest & (0ul - rest)) - 1ul); /* lowest set bit */
-        const uint ref = start + j;
-        const float8 pos = kd_candidate_lanes(ref_box + (size_t)ref * 6);
-        ulong8 below, above;
-        long8 valid;
-        kd_candidate_children(node, vload8(0, root_masks + (size_t)j * 16),
-                              vload8(1, root_masks + (size_t)j * 16), pos, lo, hi, &below, &above,
-                              &valid);
-        const float8 n_below = convert_float8(popcount(below));
-        const float8 n_above = convert_float8(popcount(above));
-        float8 cost = cost_traversal + cost_scale * (n_below * (cross + (pos - lo) * ring) +
-                                                     n_above * (cross + (hi - pos) * ring));
-        const int8 empty = ((n_below == 0.0f) & (pos > lo)) | ((n_above == 0.0f) & (pos < hi));
-        cost = select(cost, cost * (1.0f - empty_bonus), empty);
-        cost = select((float8)(INFINITY), cost, convert_int8(valid));
-        /* Per lane, the first cheapest candidate so far (strictly cheaper replaces). */
-        const int8 better = cost < lane_cost;
-        lane_cost = select(lane_cost, cost, better);
-        lane_candidate = select(lane_candidate, (uint8)(ref * 6) + lane_index, as_uint8(better));
-    }
-    /* The first cheapest candidate of all, in candidate order (reference, then lane), as one
-     * loop over every candidate would pick: the least cost, then the least index. Comparing
-     * candidate by candidate made a chain of dependent selects through one best cost, half of
-     * this function's time (perf annotate, Kitchen). */
-    /* As two horizontal minimums: the least cost, then the least index among the lanes at that
-     * cost (a scalar loop of compares branched on every lane: 13% of this function). Lanes 6 and
-     * 7, and lanes that found nothing cheaper than the leaf, hold the leaf's cost and
-     * NO_CANDIDATE, so they change neither. */
-    const float4 cost4 = fmin(lane_cost.lo, lane_cost.hi);
+    s->lane_cost = (float8)(cost_intersection * (float)popcount(mask));
+    s->lane_candidate = (uint8)(KDRAY_NO_CANDIDATE);
+}
+
+/* The six candidates of one reference (at pos, numbered first_candidate + lane), given their
+ * masks below and above. */
+inline void kd_price_candidates(KdSplitSearch* s, float8 pos, ulong8 below, ulong8 above,
+                                uint first_candidate) {
+    const uint8 lane_index = (uint8)(0, 1, 2, 3, 4, 5, 6, 7);
+    long8 valid;
+    kd_candidate_children(s->node, below, above, pos, s->lo, s->hi, &below, &above, &valid);
+    const float8 n_below = convert_float8(popcount(below));
+    const float8 n_above = convert_float8(popcount(above));
+    float8 cost =
+        s->cost_traversal + s->cost_scale * (n_below * (s->cross + (pos - s->lo) * s->ring) +
+                                             n_above * (s->cross + (s->hi - pos) * s->ring));
+    const int8 empty = ((n_below == 0.0f) & (pos > s->lo)) | ((n_above == 0.0f) & (pos < s->hi));
+    cost = select(cost, cost * (1.0f - s->empty_bonus), empty);
+    cost = select((float8)(INFINITY), cost, convert_int8(valid));
+    /* Strictly cheaper replaces: the lane keeps its first cheapest. */
+    const int8 better = cost < s->lane_cost;
+    s->lane_cost = select(s->lane_cost, cost, better);
+    s->lane_candidate =
+        select(s->lane_candidate, (uint8)(first_candidate) + lane_index, as_uint8(better));
+}
+
+/* The first cheapest candidate of all, in candidate order (reference, then lane), as one loop
+ * over every candidate would pick: the least cost, then the least index among the lanes at that
+ * cost, by two horizontal minimums (comparing candidate by candidate made a chain of dependent
+ * selects through one best cost, half of the search's time; a scalar loop over the lanes
+ * branched on every lane, 13%). Lanes 6 and 7, and lanes that found nothing cheaper than the
+ * leaf, hold the leaf's cost and NO_CANDIDATE, so they change neither. */
+inline uint kd_cheapest_candidate(const KdSplitSearch* s) {
+    const float4 cost4 = fmin(s->lane_cost.lo, s->lane_cost.hi);
     const float2 cost2 = fmin(cost4.lo, cost4.hi);
     const float best_cost = fmin(cost2.lo, cost2.hi);
     const uint8 at_best =
-        select((uint8)(KDRAY_NO_CANDIDATE), lane_candidate, as_uint8(lane_cost == best_cost));
+        select((uint8)(KDRAY_NO_CANDIDATE), s->lane_candidate, as_uint8(s->lane_cost == best_cost));
     const uint4 index4 = min(at_best.lo, at_best.hi);
     const uint2 index2 = min(index4.lo, index4.hi);
-    const uint best_candidate = min(index2.lo, index2.hi);
-    return best_candidate;
+    return min(index2.lo, index2.hi);
+}
+
+/* The lowest set bit's index. */
+inline uint kd_lowest_bit(ulong bits) {
+    return (uint)popcount((bits & (0ul - bits)) - 1ul);
+}
+
+/* The split of a node whose mask is over the small root's references (start..), by their masks
+ * in root_masks. */
+inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global const float* ref_box,
+                                __global const ulong* root_masks, float cost_traversal,
+                                float cost_intersection, float empty_bonus) {
+    KdSplitSearch s;
+    kd_start_split_search(&s, box, mask, cost_traversal, cost_intersection, empty_bonus);
+    for (ulong rest = mask; rest != 0; rest &= rest - 1) {
+        const uint j = kd_lowest_bit(rest), ref = start + j;
+        kd_price_candidates(&s, kd_candidate_lanes(ref_box + (size_t)ref * 6),
+                            vload8(0, root_masks + (size_t)j * 16),
+                            vload8(1, root_masks + (size_t)j * 16), ref * 6);
+    }
+    return kd_cheapest_candidate(&s);
 }
 
 /* Whether the plane of triangle tri (9 floats) misses the box: its corners all lie on one side
@@ -214,18 +254,107 @@ inline int kd_plane_misses_box(__global const float* tri, KdBox box) {
  * the corner of a deep node). A straddling triangle whose plane misses a child's box leaves
  * that child. */
 inline void kd_drop_missed_triangles(ulong* below, ulong* above, KdBox box, uint axis, float split,
-                                     uint start, __global const uint* ref_tri,
+                                     uint start, const uchar* clipped_ref,
+                                     __global const uint* ref_tri,
                                      __global const float* triangles) {
     for (ulong rest = *below & *above; rest != 0; rest &= rest - 1) {
         const ulong bit = rest & (0ul - rest);
-        const uint j = (uint)popcount(bit - 1ul);
-        __global const float* tri =
-            triangles + (size_t)ref_tri[start + j] * KDRAY_FLOATS_PER_TRIANGLE;
+        const uint j = kd_lowest_bit(rest);
+        const uint ref = start + (clipped_ref ? clipped_ref[j] : j);
+        __global const float* tri = triangles + (size_t)ref_tri[ref] * KDRAY_FLOATS_PER_TRIANGLE;
         const int miss_below = kd_plane_misses_box(tri, kd_child_box(box, axis, split, 0));
         const int miss_above = kd_plane_misses_box(tri, kd_child_box(box, axis, split, 1));
         if (miss_above && !miss_below) *above &= ~bit;
         if (miss_below && !miss_above) *below &= ~bit;
     }
+}
+
+/* Re-clipping (not in Zhou et al.): the masks hold the small root's boxes, which no split inside
+ * its subtree clips, so a long diagonal triangle that a few splits have cut keeps the root's box:
+ * the SAH counts it on both sides of planes it does not reach inside the node, and its own
+ * candidates are not its bounds there. A node of at most KDRAY_RECLIP_REFS references of which
+ * some extend past its box gets a table of its own: those references' triangles clipped to the
+ * node's box (the large stage's clipping), the candidates and masks of them over the node's
+ * references alone, in private memory; its subtree is split with that table. Only the first such
+ * node on a path does this (its descendants use its table), so one table per work-item is live:
+ * the walk is depth first, and the nodes pending on the stack above a clipped node are all its
+ * descendants. */
+#define KDRAY_RECLIP_REFS 32u
+
+typedef struct KdClippedTable {
+    float pos[KDRAY_RECLIP_REFS * 8];   /* per reference: its clipped box's candidate lanes */
+    uint masks[KDRAY_RECLIP_REFS * 16]; /* per reference: 8 lanes below, 8 above (side_masks) */
+    uchar ref[KDRAY_RECLIP_REFS];       /* its index in the small root's list */
+} KdClippedTable;
+
+/* The table of the node (box, its references `mask` over the small root's list from start), or 0
+ * when none of them extends past the box (clipping changes nothing). *mask becomes the node's
+ * references over the table; a triangle that misses the box leaves the node. */
+inline int kd_clip_node_table(KdBox box, ulong* mask, uint start, __global const float* ref_box,
+                              __global const uint* ref_tri, __global const float* triangles,
+                              KdClippedTable* t) {
+    int any_cut = 0;
+    for (ulong rest = *mask; rest != 0 && !any_cut; rest &= rest - 1) {
+        const KdBox b = kd_load_box(ref_box, start + kd_lowest_bit(rest));
+        any_cut = any(b.lo < box.lo) || any(b.hi > box.hi);
+    }
+    if (!any_cut) return 0;
+    uint n = 0;
+    for (ulong rest = *mask; rest != 0; rest &= rest - 1) {
+        const uint j = kd_lowest_bit(rest);
+        KdBox b = kd_load_box(ref_box, start + j);
+        if (any(b.lo < box.lo) || any(b.hi > box.hi)) {
+            b.lo = fmax(b.lo, box.lo);
+            b.hi = fmax(fmin(b.hi, box.hi), b.lo);
+            KdBox clipped;
+            __global const float* tri =
+                triangles + (size_t)ref_tri[start + j] * KDRAY_FLOATS_PER_TRIANGLE;
+            if (!kd_clip_triangle_bounds(tri, box, &clipped)) continue;
+            b.lo = fmin(fmax(b.lo, clipped.lo), b.hi);
+            b.hi = fmax(fmin(b.hi, clipped.hi), b.lo);
+        }
+        t->ref[n] = (uchar)j;
+        vstore8((float8)(b.lo.x, b.hi.x, b.lo.y, b.hi.y, b.lo.z, b.hi.z, 0.0f, 0.0f), n, t->pos);
+        ++n;
+    }
+    for (uint l = 0; l < n; ++l) {
+        const float8 pos = vload8(l, t->pos);
+        const int8 planar_above = kd_planar_above_lanes(pos);
+        uint8 below_bits = (uint8)(0), above_bits = (uint8)(0);
+        for (uint m = 0; m < n; ++m) {
+            const float8 other = vload8(m, t->pos);
+            int8 is_below, is_above;
+            kd_candidate_sides(pos, planar_above, other.s00224466, other.s11335577, &is_below,
+                               &is_above);
+            below_bits |= as_uint8(is_below) & (1u << m);
+            above_bits |= as_uint8(is_above) & (1u << m);
+        }
+        vstore8(below_bits, 0, t->masks + l * 16);
+        vstore8(above_bits, 1, t->masks + l * 16);
+    }
+    *mask = (1ul << n) - 1ul;
+    return 1;
+}
+
+/* kd_best_small_split over a clipped table. */
+inline uint kd_best_clipped_split(KdBox box, ulong mask, const KdClippedTable* t,
+                                  float cost_traversal, float cost_intersection,
+                                  float empty_bonus) {
+    KdSplitSearch s;
+    kd_start_split_search(&s, box, mask, cost_traversal, cost_intersection, empty_bonus);
+    for (ulong rest = mask; rest != 0; rest &= rest - 1) {
+        const uint l = kd_lowest_bit(rest);
+        kd_price_candidates(&s, vload8(l, t->pos), convert_ulong8(vload8(0, t->masks + l * 16)),
+                            convert_ulong8(vload8(1, t->masks + l * 16)), l * 6);
+    }
+    return kd_cheapest_candidate(&s);
+}
+
+/* A mask over a clipped table as a mask over the small root's references. */
+inline ulong kd_root_mask(const KdClippedTable* t, ulong mask) {
+    ulong root = 0;
+    for (ulong rest = mask; rest != 0; rest &= rest - 1) root |= 1ul << t->ref[kd_lowest_bit(rest)];
+    return root;
 }
 
 /* A node waiting on the subtree builder's stack: the above child of the split node `parent`. */
@@ -235,6 +364,7 @@ typedef struct KdPendingNode {
     uint depth;
     uint parent;
     uint parent_axis;
+    uint clipped; /* its mask is over the work-item's clipped table, not the small root's list */
 } KdPendingNode;
 
 /* Small-node stage (§4.2), one work-item per small root: split the root's subtree depth first,
@@ -277,6 +407,8 @@ __kernel void kd_build_small_subtrees(
     node.mask = count >= 64 ? ~0ul : ((1ul << count) - 1ul);
     node.depth = root_depth[q];
     node.parent = KDRAY_NO_CANDIDATE;
+    node.clipped = 0;
+    KdClippedTable table;
     uint written = 0, leaf_refs = 0, deepest = node.depth;
     for (;;) {
         /* The next node in preorder; an above child completes its parent's record. */
@@ -285,15 +417,24 @@ __kernel void kd_build_small_subtrees(
         if (node.parent != KDRAY_NO_CANDIDATE && node.parent < budget)
             out[node.parent].x = node.parent_axis | (at << 2);
         uint best = KDRAY_NO_CANDIDATE;
-        if (node.mask != 0 && node.depth < max_depth && kd_box_area(node.box) > 0.0f)
-            best = kd_best_small_split(node.box, node.mask, start, ref_box, root_masks,
-                                       cost_traversal, cost_intersection, empty_bonus);
+        if (node.mask != 0 && node.depth < max_depth && kd_box_area(node.box) > 0.0f) {
+            if (!node.clipped && popcount(node.mask) <= KDRAY_RECLIP_REFS)
+                node.clipped = kd_clip_node_table(node.box, &node.mask, start, ref_box, ref_tri,
+                                                  triangles, &table);
+            if (node.clipped)
+                best = kd_best_clipped_split(node.box, node.mask, &table, cost_traversal,
+                                             cost_intersection, empty_bonus);
+            else
+                best = kd_best_small_split(node.box, node.mask, start, ref_box, root_masks,
+                                           cost_traversal, cost_intersection, empty_bonus);
+        }
         if (best == KDRAY_NO_CANDIDATE) {
             /* Leaf: its triangles are the mask's, its references the next in preorder. */
-            const uint n = popcount(node.mask);
+            const ulong leaf_mask = node.clipped ? kd_root_mask(&table, node.mask) : node.mask;
+            const uint n = popcount(leaf_mask);
             if (at < budget)
-                out[at] = (uint4)(KDRAY_LEAF_AXIS | (leaf_refs << 2), n, (uint)node.mask,
-                                  (uint)(node.mask >> 32));
+                out[at] = (uint4)(KDRAY_LEAF_AXIS | (leaf_refs << 2), n, (uint)leaf_mask,
+                                  (uint)(leaf_mask >> 32));
             leaf_refs += n;
             if (top == 0) break;
             node = stack[--top];
@@ -301,30 +442,44 @@ __kernel void kd_build_small_subtrees(
         }
         /* Inner node: go on with the below child, keep the above child for later. */
         const uint ref = best / 6, k = best % 6, axis = k / 2;
-        __global const float* b = ref_box + (size_t)ref * 6;
-        const float split = b[(k % 2) * 3 + axis];
+        float8 pos;
+        ulong8 below, above;
+        const uchar* clipped_ref = 0;
+        if (node.clipped) {
+            pos = vload8(ref, table.pos);
+            below = convert_ulong8(vload8(0, table.masks + ref * 16));
+            above = convert_ulong8(vload8(1, table.masks + ref * 16));
+            clipped_ref = table.ref;
+        } else {
+            __global const ulong* masks = root_masks + (size_t)(ref - start) * 16;
+            pos = kd_candidate_lanes(ref_box + (size_t)ref * 6);
+            below = vload8(0, masks);
+            above = vload8(1, masks);
+        }
+        float lanes[8];
+        vstore8(pos, 0, lanes);
+        const float split = lanes[k];
         ulong children[2][8];
         {
             float8 lo, hi;
             kd_box_lanes(node.box, &lo, &hi);
-            ulong8 below, above;
             long8 valid;
-            __global const ulong* masks = root_masks + (size_t)(ref - start) * 16;
-            kd_candidate_children((ulong8)(node.mask), vload8(0, masks), vload8(1, masks),
-                                  kd_candidate_lanes(b), lo, hi, &below, &above, &valid);
+            kd_candidate_children((ulong8)(node.mask), below, above, pos, lo, hi, &below, &above,
+                                  &valid);
             vstore8(below, 0, children[0]);
             vstore8(above, 0, children[1]);
         }
         kd_drop_missed_triangles(&children[0][k], &children[1][k], node.box, axis, split, start,
-                                 ref_tri, triangles);
+                                 clipped_ref, ref_tri, triangles);
         if (at < budget) out[at] = (uint4)(axis, as_uint(split), 0, 0);
-        KdPendingNode above;
-        above.box = kd_child_box(node.box, axis, split, 1);
-        above.mask = children[1][k];
-        above.depth = node.depth + 1;
-        above.parent = at;
-        above.parent_axis = axis;
-        stack[top++] = above;
+        KdPendingNode pending;
+        pending.box = kd_child_box(node.box, axis, split, 1);
+        pending.mask = children[1][k];
+        pending.depth = node.depth + 1;
+        pending.parent = at;
+        pending.parent_axis = axis;
+        pending.clipped = node.clipped;
+        stack[top++] = pending;
         node.box = kd_child_box(node.box, axis, split, 0);
         node.mask = children[0][k];
         node.depth += 1;
