@@ -23,6 +23,16 @@
 #define KDRAY_DEVICE_CODE 1
 #endif
 
+/* Functions whose inlining a kernel's speed depends on: PoCL (LLVM at -O2) left the walk, the
+ * triangle test, kd_trace_sample and the builder's triangle clipping as calls, which keeps their
+ * callers' constants in memory behind pointers (and, for a box passed by value, made a stalled
+ * store-to-load copy per call). Compilers without the attribute get plain inline. */
+#if defined(__clang__) || defined(__GNUC__)
+#define KDRAY_HOT_INLINE inline __attribute__((always_inline))
+#else
+#define KDRAY_HOT_INLINE inline
+#endif
+
 #ifdef KDRAY_DEVICE_CODE
 typedef uint kd_u32;
 typedef int kd_i32;

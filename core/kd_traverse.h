@@ -33,15 +33,6 @@
 #define KDRAY_HAS_DOUBLE 1
 #endif
 
-/* The walk and the triangle test are always inlined into their caller: PoCL (LLVM at -O2) left
- * kd_trace, kd_intersect_triangle and kd_trace_sample as calls, which keeps the per-ray constants
- * in memory behind pointers. Compilers without the attribute get plain inline. */
-#if defined(__clang__) || defined(__GNUC__)
-#define KDRAY_HOT_INLINE inline __attribute__((always_inline))
-#else
-#define KDRAY_HOT_INLINE inline
-#endif
-
 /* Component k (0, 1 or 2) of a three-float array by selects, not by a variable index: a private
  * array indexed by a variable cannot live in registers (on a GPU it goes to scratch memory). */
 #define KDRAY_PICK3(v, k) ((k) == 0 ? (v)[0] : ((k) == 1 ? (v)[1] : (v)[2]))

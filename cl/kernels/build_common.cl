@@ -82,7 +82,7 @@ inline uint kd_classify(float lo, float hi, float split, uint planar_sides) {
  * planes. The box is first grown by a few ulps of its magnitude so that float rounding in the
  * clipping can only make the result larger, never lose a part that really enters the box; the
  * result is then cut back to the box. Returns 0 when the triangle misses the grown box. */
-inline int kd_clip_triangle_bounds(__global const float* tri, KdBox box, KdBox* out) {
+KDRAY_HOT_INLINE int kd_clip_triangle_bounds(__global const float* tri, KdBox box, KdBox* out) {
     const float3 magnitude = fmax(fabs(box.lo), fabs(box.hi));
     const float eps = 8.0f * FLT_EPSILON * fmax(magnitude.x, fmax(magnitude.y, magnitude.z));
     const float3 lo = box.lo - eps, hi = box.hi + eps;

@@ -168,6 +168,46 @@ __kernel void kd_split_large_nodes(uint nodes, __global float* node_box,
  * child_box (at [side * refs + r]), not ref_box. */
 #define KDRAY_CLIPPED 4u
 
+/* The references begin..end of one node (box `node`) against its split plane, kd_classify_chunks'
+ * loop: returns the counts going below and above. Always inlined, and called with a constant
+ * axis, so that each copy reads that axis's coordinates directly (with the axis a variable, the
+ * loop picked them by masked moves); with the clipping inlined too (no box copied to the stack
+ * per call), Kitchen build 85.9 -> 76.8 ms (median of 6 interleaved rounds of 7 builds). */
+KDRAY_HOT_INLINE uint2 kd_classify_references(uint begin, uint end, uint refs, const uint axis,
+                                              float split, uint planar, KdBox node,
+                                              __global const uint* ref_tri,
+                                              __global const float* ref_box,
+                                              __global const float* triangles,
+                                              __global uchar* ref_sides,
+                                              __global float* child_box) {
+    uint below = 0, above = 0;
+    for (uint r = begin; r < end; ++r) {
+        __global const float* box = ref_box + (size_t)r * 6;
+        uint sides = kd_classify(box[axis], box[3 + axis], split, planar);
+        if (sides == (KDRAY_BELOW | KDRAY_ABOVE)) {
+            const KdBox b = kd_load_box(ref_box, r);
+            __global const float* tri = triangles + (size_t)ref_tri[r] * KDRAY_FLOATS_PER_TRIANGLE;
+            uint entered = 0;
+            for (uint side = 0; side < 2; ++side) {
+                KdBox cut = b, clipped;
+                if (side == 0) cut.hi = kd_with_axis(cut.hi, axis, split);
+                else cut.lo = kd_with_axis(cut.lo, axis, split);
+                if (kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, side), &clipped)) {
+                    entered |= side == 0 ? KDRAY_BELOW : KDRAY_ABOVE;
+                    cut.lo = fmin(fmax(cut.lo, clipped.lo), cut.hi);
+                    cut.hi = fmax(fmin(cut.hi, clipped.hi), cut.lo);
+                }
+                kd_store_box(child_box, (size_t)side * refs + r, cut);
+            }
+            sides = (entered ? entered : sides) | KDRAY_CLIPPED;
+        }
+        ref_sides[r] = (uchar)sides;
+        below += (sides & KDRAY_BELOW) != 0;
+        above += (sides & KDRAY_ABOVE) != 0;
+    }
+    return (uint2)(below, above);
+}
+
 /* Classify chunk c's references (a leaf node's get no sides): ref_sides[r] as above, and the
  * chunk's counts of references going below (chunk_counts[c]) and above (chunk_counts[chunks +
  * c]), scanned afterwards. A box on one side of the plane keeps it; a straddling one becomes the
@@ -190,41 +230,25 @@ __kernel void kd_classify_chunks(uint chunks, uint refs, uint nodes,
     const uint begin = node_ref_start[i] + (c - node_chunk[i]) * KDRAY_REDUCE_CHUNK;
     const uint end = min(node_ref_start[i] + node_ref_count[i], begin + KDRAY_REDUCE_CHUNK);
     const uint axis = split_axis[i];
-    uint below = 0, above = 0;
+    uint2 counts = (uint2)(0, 0);
     if (axis == KDRAY_LEAF_AXIS) {
         for (uint r = begin; r < end; ++r) ref_sides[r] = 0;
     } else {
         const float split = split_pos[i];
         const uint planar = planar_sides[i];
         const KdBox node = kd_load_box(node_box, i);
-        for (uint r = begin; r < end; ++r) {
-            const KdBox b = kd_load_box(ref_box, r);
-            uint sides = kd_classify(kd_axis_of(b.lo, axis), kd_axis_of(b.hi, axis), split, planar);
-            if (sides == (KDRAY_BELOW | KDRAY_ABOVE)) {
-                __global const float* tri =
-                    triangles + (size_t)ref_tri[r] * KDRAY_FLOATS_PER_TRIANGLE;
-                uint entered = 0;
-                for (uint side = 0; side < 2; ++side) {
-                    KdBox cut = b, clipped;
-                    if (side == 0) cut.hi = kd_with_axis(cut.hi, axis, split);
-                    else cut.lo = kd_with_axis(cut.lo, axis, split);
-                    if (kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, side),
-                                                &clipped)) {
-                        entered |= side == 0 ? KDRAY_BELOW : KDRAY_ABOVE;
-                        cut.lo = fmin(fmax(cut.lo, clipped.lo), cut.hi);
-                        cut.hi = fmax(fmin(cut.hi, clipped.hi), cut.lo);
-                    }
-                    kd_store_box(child_box, (size_t)side * refs + r, cut);
-                }
-                sides = (entered ? entered : sides) | KDRAY_CLIPPED;
-            }
-            ref_sides[r] = (uchar)sides;
-            below += (sides & KDRAY_BELOW) != 0;
-            above += (sides & KDRAY_ABOVE) != 0;
-        }
+        if (axis == 0)
+            counts = kd_classify_references(begin, end, refs, 0, split, planar, node, ref_tri,
+                                            ref_box, triangles, ref_sides, child_box);
+        else if (axis == 1)
+            counts = kd_classify_references(begin, end, refs, 1, split, planar, node, ref_tri,
+                                            ref_box, triangles, ref_sides, child_box);
+        else
+            counts = kd_classify_references(begin, end, refs, 2, split, planar, node, ref_tri,
+                                            ref_box, triangles, ref_sides, child_box);
     }
-    chunk_counts[c] = below;
-    chunk_counts[chunks + c] = above;
+    chunk_counts[c] = counts.x;
+    chunk_counts[chunks + c] = counts.y;
 }
 
 /* Value of slot `s` of kind `k` and its rank among the level's slots of that kind, from the
