@@ -17,8 +17,8 @@ namespace kdray::test {
 /// Random triangles of size ~`size` inside the cube [offset, offset + extent]^3.
 Scene random_triangles(int count, std::uint32_t seed, float extent = 1.0f, float size = 0.1f,
                        float offset = 0.0f);
-/// Long thin triangles (1 long, 0.02 wide) through the unit cube in random directions: each
-/// crosses many of the nodes that a small root of them splits into.
+/// Long thin triangles (1 long, at most 0.02 wide) in random directions, centred in the unit
+/// cube: each crosses many of the nodes that a small root of them splits into.
 Scene long_slivers(int count, std::uint32_t seed);
 /// All triangles in the plane z = 0: the root is flat, every node below it too.
 Scene planar_triangles(int count, std::uint32_t seed);

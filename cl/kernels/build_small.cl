@@ -14,7 +14,8 @@
  * paper: a node of at most KDRAY_RECLIP_REFS triangles re-clips them to its box and prices its
  * subtree with masks of its own (re-clipping, below).
  *
- * Candidates are the boundaries of the root's (clipped) triangle boxes: candidate 6*ref + 2*axis
+ * Candidates are the boundaries of the root's (clipped) triangle boxes, or of a re-clipped node's
+ * (KdClippedTable): candidate 6*ref + 2*axis
  * + side lies at the box's lo (side 0) or hi (side 1) on that axis. side_masks holds 16 masks per
  * reference, [16 ref + k] the triangles below its candidate k and [16 ref + 8 + k] those above
  * (k < 6; two lanes of padding each), so that the kernels read a reference's masks as two ulong8.
@@ -112,9 +113,9 @@ __kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const f
  * hi per lane) the masks themselves; at the node's lo face, the lo lanes make a flat child below
  * of the triangles lying in the face (below and not above) and leave the rest above; at its hi
  * face, the hi lanes make a flat child above of those lying there (above and not below). The
- * masks are over the small root's boxes, which a node's box does not clip, so on a face they
- * would also count the triangles that only extend past it. Lanes that split nothing (other
- * candidates on a face, lanes 6 and 7) get no child at all: *valid is 0 there. */
+ * masks are over boxes clipped to the small root (or to a re-clipping ancestor), not to the node,
+ * so on a face they would also count the triangles that only extend past it. Lanes that split
+ * nothing (other candidates on a face, lanes 6 and 7) get no child at all: *valid is 0 there. */
 inline void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above, float8 pos, float8 lo,
                                   float8 hi, ulong8* below_out, ulong8* above_out, long8* valid) {
     const int8 lo_lane = (int8)(-1, 0, -1, 0, -1, 0, 0, 0);
@@ -142,7 +143,7 @@ inline void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above, float
  * kd_compute_split_masks; lanes 6 and 7 unused): a scalar loop per candidate took 131 ms of CPU
  * per kitchen build (perf), this one 115 ms. The search is split in three (start, price each
  * reference, pick) because the references and their masks come from global memory for the small
- * root's table and from private memory for a re-clipped node's (KdClippedRoot). */
+ * root's table and from private memory for a re-clipped node's (KdClippedTable). */
 #define KDRAY_NO_CANDIDATE 0xFFFFFFFFu
 
 typedef struct KdSplitSearch {
@@ -249,18 +250,18 @@ inline int kd_plane_misses_box(__global const float* tri, KdBox box) {
     return fabs(distance) > radius + slack;
 }
 
-/* The masks carry the small root's boxes, which a node's box does not clip, so a triangle whose
- * box straddles a split may still miss one child inside this node (a long diagonal triangle past
- * the corner of a deep node). A straddling triangle whose plane misses a child's box leaves
- * that child. */
+/* The masks carry boxes clipped to the small root (or to a re-clipping ancestor), not to the node,
+ * so a triangle whose box straddles a split may still miss one child inside this node (a long
+ * diagonal triangle past the corner of a deep node). A straddling triangle whose plane misses a
+ * child's box leaves that child. */
 inline void kd_drop_missed_triangles(ulong* below, ulong* above, KdBox box, uint axis, float split,
-                                     uint start, const uchar* clipped_ref,
+                                     uint start, const uchar* table_ref,
                                      __global const uint* ref_tri,
                                      __global const float* triangles) {
     for (ulong rest = *below & *above; rest != 0; rest &= rest - 1) {
         const ulong bit = rest & (0ul - rest);
         const uint j = kd_lowest_bit(rest);
-        const uint ref = start + (clipped_ref ? clipped_ref[j] : j);
+        const uint ref = start + (table_ref ? table_ref[j] : j);
         __global const float* tri = triangles + (size_t)ref_tri[ref] * KDRAY_FLOATS_PER_TRIANGLE;
         const int miss_below = kd_plane_misses_box(tri, kd_child_box(box, axis, split, 0));
         const int miss_above = kd_plane_misses_box(tri, kd_child_box(box, axis, split, 1));
@@ -282,7 +283,7 @@ inline void kd_drop_missed_triangles(ulong* below, ulong* above, KdBox box, uint
 #define KDRAY_RECLIP_REFS 32u
 
 typedef struct KdClippedTable {
-    float pos[KDRAY_RECLIP_REFS * 8];   /* per reference: its clipped box's candidate lanes */
+    float candidates[KDRAY_RECLIP_REFS * 8]; /* per reference: its clipped box's candidate lanes */
     uint masks[KDRAY_RECLIP_REFS * 16]; /* per reference: 8 lanes below, 8 above (side_masks) */
     uchar ref[KDRAY_RECLIP_REFS];       /* its index in the small root's list */
 } KdClippedTable;
@@ -314,15 +315,16 @@ inline int kd_clip_node_table(KdBox box, ulong* mask, uint start, __global const
             b.hi = fmax(fmin(b.hi, clipped.hi), b.lo);
         }
         t->ref[n] = (uchar)j;
-        vstore8((float8)(b.lo.x, b.hi.x, b.lo.y, b.hi.y, b.lo.z, b.hi.z, 0.0f, 0.0f), n, t->pos);
+        vstore8((float8)(b.lo.x, b.hi.x, b.lo.y, b.hi.y, b.lo.z, b.hi.z, 0.0f, 0.0f), n,
+                t->candidates);
         ++n;
     }
     for (uint l = 0; l < n; ++l) {
-        const float8 pos = vload8(l, t->pos);
+        const float8 pos = vload8(l, t->candidates);
         const int8 planar_above = kd_planar_above_lanes(pos);
         uint8 below_bits = (uint8)(0), above_bits = (uint8)(0);
         for (uint m = 0; m < n; ++m) {
-            const float8 other = vload8(m, t->pos);
+            const float8 other = vload8(m, t->candidates);
             int8 is_below, is_above;
             kd_candidate_sides(pos, planar_above, other.s00224466, other.s11335577, &is_below,
                                &is_above);
@@ -344,7 +346,8 @@ inline uint kd_best_clipped_split(KdBox box, ulong mask, const KdClippedTable* t
     kd_start_split_search(&s, box, mask, cost_traversal, cost_intersection, empty_bonus);
     for (ulong rest = mask; rest != 0; rest &= rest - 1) {
         const uint l = kd_lowest_bit(rest);
-        kd_price_candidates(&s, vload8(l, t->pos), convert_ulong8(vload8(0, t->masks + l * 16)),
+        kd_price_candidates(&s, vload8(l, t->candidates),
+                            convert_ulong8(vload8(0, t->masks + l * 16)),
                             convert_ulong8(vload8(1, t->masks + l * 16)), l * 6);
     }
     return kd_cheapest_candidate(&s);
@@ -364,7 +367,7 @@ typedef struct KdPendingNode {
     uint depth;
     uint parent;
     uint parent_axis;
-    uint clipped; /* its mask is over the work-item's clipped table, not the small root's list */
+    uint on_table; /* its mask is over the work-item's KdClippedTable, not the small root's list */
 } KdPendingNode;
 
 /* Small-node stage (§4.2), one work-item per small root: split the root's subtree depth first,
@@ -407,7 +410,7 @@ __kernel void kd_build_small_subtrees(
     node.mask = count >= 64 ? ~0ul : ((1ul << count) - 1ul);
     node.depth = root_depth[q];
     node.parent = KDRAY_NO_CANDIDATE;
-    node.clipped = 0;
+    node.on_table = 0;
     KdClippedTable table;
     uint written = 0, leaf_refs = 0, deepest = node.depth;
     for (;;) {
@@ -418,10 +421,10 @@ __kernel void kd_build_small_subtrees(
             out[node.parent].x = node.parent_axis | (at << 2);
         uint best = KDRAY_NO_CANDIDATE;
         if (node.mask != 0 && node.depth < max_depth && kd_box_area(node.box) > 0.0f) {
-            if (!node.clipped && popcount(node.mask) <= KDRAY_RECLIP_REFS)
-                node.clipped = kd_clip_node_table(node.box, &node.mask, start, ref_box, ref_tri,
-                                                  triangles, &table);
-            if (node.clipped)
+            if (!node.on_table && popcount(node.mask) <= KDRAY_RECLIP_REFS)
+                node.on_table = kd_clip_node_table(node.box, &node.mask, start, ref_box, ref_tri,
+                                                   triangles, &table);
+            if (node.on_table)
                 best = kd_best_clipped_split(node.box, node.mask, &table, cost_traversal,
                                              cost_intersection, empty_bonus);
             else
@@ -430,7 +433,7 @@ __kernel void kd_build_small_subtrees(
         }
         if (best == KDRAY_NO_CANDIDATE) {
             /* Leaf: its triangles are the mask's, its references the next in preorder. */
-            const ulong leaf_mask = node.clipped ? kd_root_mask(&table, node.mask) : node.mask;
+            const ulong leaf_mask = node.on_table ? kd_root_mask(&table, node.mask) : node.mask;
             const uint n = popcount(leaf_mask);
             if (at < budget)
                 out[at] = (uint4)(KDRAY_LEAF_AXIS | (leaf_refs << 2), n, (uint)leaf_mask,
@@ -444,21 +447,21 @@ __kernel void kd_build_small_subtrees(
         const uint ref = best / 6, k = best % 6, axis = k / 2;
         float8 pos;
         ulong8 below, above;
-        const uchar* clipped_ref = 0;
-        if (node.clipped) {
-            pos = vload8(ref, table.pos);
+        const uchar* table_ref = 0;
+        if (node.on_table) {
+            pos = vload8(ref, table.candidates);
             below = convert_ulong8(vload8(0, table.masks + ref * 16));
             above = convert_ulong8(vload8(1, table.masks + ref * 16));
-            clipped_ref = table.ref;
+            table_ref = table.ref;
         } else {
             __global const ulong* masks = root_masks + (size_t)(ref - start) * 16;
             pos = kd_candidate_lanes(ref_box + (size_t)ref * 6);
             below = vload8(0, masks);
             above = vload8(1, masks);
         }
-        float lanes[8];
-        vstore8(pos, 0, lanes);
-        const float split = lanes[k];
+        float candidate_pos[8];
+        vstore8(pos, 0, candidate_pos);
+        const float split = candidate_pos[k];
         ulong children[2][8];
         {
             float8 lo, hi;
@@ -470,7 +473,7 @@ __kernel void kd_build_small_subtrees(
             vstore8(above, 0, children[1]);
         }
         kd_drop_missed_triangles(&children[0][k], &children[1][k], node.box, axis, split, start,
-                                 clipped_ref, ref_tri, triangles);
+                                 table_ref, ref_tri, triangles);
         if (at < budget) out[at] = (uint4)(axis, as_uint(split), 0, 0);
         KdPendingNode pending;
         pending.box = kd_child_box(node.box, axis, split, 1);
@@ -478,7 +481,7 @@ __kernel void kd_build_small_subtrees(
         pending.depth = node.depth + 1;
         pending.parent = at;
         pending.parent_axis = axis;
-        pending.clipped = node.clipped;
+        pending.on_table = node.on_table;
         stack[top++] = pending;
         node.box = kd_child_box(node.box, axis, split, 0);
         node.mask = children[0][k];
