@@ -162,6 +162,7 @@ ClDevice::ClDevice(const std::string& selector) {
         context_ = cl::Context(device_);
         queue_ = cl::CommandQueue(context_, device_);  // in order, no profiling
     });
+    buffer_pool_ = BufferPool(std::min<std::uint64_t>(info_.global_mem_bytes / 8, 1ull << 30));
 }
 
 cl::Buffer ClDevice::allocate(std::size_t bytes, const std::string& what) const {

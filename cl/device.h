@@ -11,6 +11,8 @@
 
 #include <CL/opencl.hpp>
 
+#include "cl/buffer_pool.h"
+
 namespace kdray {
 
 /// One device as `kdray stats` reports it. `index` is its position in list_cl_devices(), the
@@ -31,7 +33,8 @@ struct ClDeviceInfo {
 /// PoCL, when the ICD loader finds no platform at all.
 std::vector<ClDeviceInfo> list_cl_devices();
 
-/// An opened device: its context and one in-order command queue.
+/// An opened device: its context, one in-order command queue, and the buffers that finished builds
+/// gave back (BufferPool).
 class ClDevice {
   public:
     /// selector: "" picks the first GPU, or the first device when there is no GPU; a number picks
@@ -48,11 +51,15 @@ class ClDevice {
     /// naming `what` and the size when it exceeds CL_DEVICE_MAX_MEM_ALLOC_SIZE or fails.
     cl::Buffer allocate(std::size_t bytes, const std::string& what) const;
 
+    /// Buffers kept for the next build: at most an eighth of the device's memory, and 1 GiB.
+    BufferPool& buffer_pool() { return buffer_pool_; }
+
   private:
     cl::Device device_;
     cl::Context context_;
     cl::CommandQueue queue_;
     ClDeviceInfo info_;
+    BufferPool buffer_pool_;
 };
 
 /// The devices on one line, for error messages: "0: NAME (VENDOR, TYPE, VERSION); 1: ...".

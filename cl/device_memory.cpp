@@ -18,6 +18,13 @@ DeviceArray& DeviceArray::operator=(DeviceArray&& other) noexcept {
     return *this;
 }
 
+cl::Buffer DeviceArray::detach() {
+    if (owner_) owner_->current_ -= bytes_;
+    owner_ = nullptr;
+    bytes_ = 0;
+    return std::exchange(buffer_, cl::Buffer());
+}
+
 void DeviceArray::release() {
     if (owner_) owner_->recycle(std::move(buffer_), bytes_);
     buffer_ = cl::Buffer();
@@ -44,9 +51,14 @@ DeviceArray DeviceMemory::allocate(std::size_t bytes, const std::string& what) {
         spares_.erase(best);
         return array;  // already counted in current_
     }
-    array.buffer_ = device_.allocate(bytes, what);
-    array.bytes_ = bytes;
-    current_ += bytes;
+    std::size_t pooled_bytes = 0;
+    array.buffer_ = device_.buffer_pool().take(bytes, limit, &pooled_bytes);
+    array.bytes_ = pooled_bytes;
+    if (!array.buffer_()) {
+        array.buffer_ = device_.allocate(bytes, what);
+        array.bytes_ = bytes;
+    }
+    current_ += array.bytes_;
     peak_ = std::max(peak_, current_);
     return array;
 }
@@ -60,11 +72,15 @@ void DeviceMemory::recycle(cl::Buffer buffer, std::size_t bytes) {
     // it was 30 ms too, but the peak 225 MB). Half rather than all of it: device bytes per
     // triangle Kitchen 901 -> 804, Robots 979 -> 889, Sponza 1026 -> 952, build time the same
     // within noise (kdray build --repeat 7, alternated twice, quiet 2-core PoCL).
-    while (2 * spare_bytes_ > current_ - spare_bytes_ && !spares_.empty()) {
+    while (!closing_ && 2 * spare_bytes_ > current_ - spare_bytes_ && !spares_.empty()) {
         spare_bytes_ -= spares_.front().bytes;
         current_ -= spares_.front().bytes;
         spares_.erase(spares_.begin());
     }
+}
+
+DeviceMemory::~DeviceMemory() {
+    for (Spare& spare : spares_) device_.buffer_pool().keep(std::move(spare.buffer), spare.bytes);
 }
 
 void DeviceMemory::reserve(DeviceArray& array, std::size_t bytes, std::size_t used,

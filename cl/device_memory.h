@@ -5,9 +5,10 @@
 // A released buffer is kept for reuse by a later allocation of about its size: a build allocates
 // a fresh set of per-level arrays at each of its 30 to 60 levels, and on a CPU device (PoCL) every
 // fresh buffer is fresh host pages, so the page faults of touching them cost about 50 ms of CPU
-// time per kitchen build (perf, kernel samples per build) before the buffers were recycled.
-// Reuse is safe on the device's in-order queue: work enqueued on a recycled buffer runs after
-// every earlier command that used it.
+// time per kitchen build (perf, kernel samples per build) before the buffers were recycled. What
+// a build holds when it ends goes to the device's BufferPool for the next build. Reuse is safe on
+// the device's in-order queue: work enqueued on a recycled buffer runs after every earlier
+// command that used it.
 #pragma once
 
 #include <cstddef>
@@ -34,6 +35,9 @@ class DeviceArray {
 
     const cl::Buffer& buffer() const { return buffer_; }
     std::size_t bytes() const { return bytes_; }
+    /// The buffer, no longer counted or recycled: for buffers that outlive the build (the tree
+    /// handed to the renderer), which no later build may take.
+    cl::Buffer detach();
 
   private:
     friend class DeviceMemory;
@@ -44,11 +48,19 @@ class DeviceArray {
     DeviceMemory* owner_ = nullptr;
 };
 
-/// Allocates counted buffers on one device, recycles released ones, and remembers the peak of the
-/// bytes it held at once (in use or kept for reuse).
+/// Allocates counted buffers on one device (its own spares first, then the device's BufferPool,
+/// then new ones), recycles released ones, and remembers the peak of the bytes it held at once (in
+/// use or kept for reuse).
 class DeviceMemory {
   public:
     explicit DeviceMemory(ClDevice& device) : device_(device) {}
+    /// Gives the spares it still holds to the device's BufferPool.
+    ~DeviceMemory();
+    /// From now on every released buffer is kept (for the BufferPool), none given back: for the
+    /// end of a build, when its arrays are released one after another.
+    void close() { closing_ = true; }
+    DeviceMemory(const DeviceMemory&) = delete;
+    DeviceMemory& operator=(const DeviceMemory&) = delete;
 
     /// A buffer of at least `bytes` (at least one byte; a recycled buffer may be up to twice as
     /// large); `what` names it in errors.
@@ -72,6 +84,7 @@ class DeviceMemory {
     ClDevice& device_;
     std::vector<Spare> spares_;    // released buffers, for reuse
     std::size_t spare_bytes_ = 0;  // their sum (also counted in current_)
+    bool closing_ = false;
     std::size_t current_ = 0;
     std::size_t peak_ = 0;
 };

@@ -59,6 +59,8 @@ struct Build {
           kernels(d, p.large_split_bins),
           params(p),
           triangles(static_cast<cl_uint>(triangle_count)) {}
+    // The arrays below are released after this body: all of them go to the device's BufferPool.
+    ~Build() { memory.close(); }
 
     ClDevice& device;
     cl::CommandQueue& queue;
@@ -83,6 +85,8 @@ struct Build {
     // per batch of roots, node and leaf reference counts per root.
     SmallRoots small_first;
     std::vector<SmallBatch> small_batches;
+    // The split-candidate masks of the last batch (build_small.cl).
+    DeviceArray side_masks;
     DeviceArray subtree_node_count, subtree_leaf_refs;
     cl_uint small_nodes = 0;
     int large_levels = 0, small_levels = 0;

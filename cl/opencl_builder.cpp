@@ -364,7 +364,7 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
                                       tree.leaf_indices.data());
     });
     clock.lap("download");
-    if (on_device) *on_device = {nodes.buffer(), leaf_indices.buffer(), b.triangle_data.buffer()};
+    if (on_device) *on_device = {nodes.detach(), leaf_indices.detach(), b.triangle_data.detach()};
     if (report) {
         report->build_ms =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)

@@ -80,8 +80,12 @@ void run_small_stage(Build& b, int max_depth, cl_uint first_scale, std::size_t b
 
     DeviceArray totals = b.allocate(3 * 4, "small stage totals");
     for (SmallBatch& batch : b.small_batches) {
-        DeviceArray side_masks =
-            b.allocate(std::size_t(batch.refs) * kMaskBytesPerRef, "candidate masks");
+        // The last batch's masks are held to the end of the build, whose arrays then go to the
+        // device's BufferPool: a fresh buffer this size (40 MB for the dragon) every frame was
+        // 10k page faults on PoCL. The batch before's are released first, for this one to reuse.
+        b.side_masks = DeviceArray();
+        b.side_masks = b.allocate(std::size_t(batch.refs) * kMaskBytesPerRef, "candidate masks");
+        const DeviceArray& side_masks = b.side_masks;
         enqueue_kernel(q, k.split_masks, batch.refs, batch.ref_begin, batch.refs,
                        b.small_ref_box.buffer(), b.small_ref_root.buffer(),
                        b.root_ref_start.buffer(), b.root_ref_count.buffer(), side_masks.buffer());

@@ -386,3 +386,26 @@ TEST_CASE("opencl builder: subtrees that outgrow their first records give the sa
             scene, 17);
     }
 }
+
+TEST_CASE("opencl builder: buffers kept from an earlier build give the same tree") {
+    // Builds take their arrays from the device's BufferPool, filled by earlier builds with their
+    // data: no kernel may rely on what a buffer held before. The tree handed to the renderer
+    // (DeviceTree) must stay out of the pool, or the next build would overwrite it.
+    ClDevice& device = test::opencl_test_device();
+    const Scene scene = test::random_triangles(3000, 41), other = test::random_triangles(5000, 43);
+    device.buffer_pool().clear();
+    const KdTree fresh = build_opencl(device, scene);
+    CHECK(device.buffer_pool().bytes() > 0);
+    DeviceTree on_device;
+    const KdTree first = build_opencl(device, other, {}, nullptr, &on_device);
+    const KdTree reused = build_opencl(device, scene);
+    check_same_tree(reused, fresh, scene, 23);
+    std::vector<KdNode> nodes(first.nodes.size());
+    device.queue().enqueueReadBuffer(on_device.nodes, CL_TRUE, 0, nodes.size() * sizeof(KdNode),
+                                     nodes.data());
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+        differ += nodes[i].axis_and_offset != first.nodes[i].axis_and_offset ||
+                  nodes[i].split_or_count != first.nodes[i].split_or_count;
+    CHECK(differ == 0);
+}
