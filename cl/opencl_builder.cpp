@@ -64,7 +64,10 @@ Kernels::Kernels(const ClDevice& device, int large_split_bins) {
     const cl::Program large =
         cached_program(device, "build_large.cl",
                        defines + " -DKDRAY_LARGE_BINS=" + std::to_string(large_split_bins) + "u");
-    const cl::Program small = cached_program(device, "build_small.cl", defines);
+    // CPU compilers may have no vector popcount (build_small.cl, kd_popcount8).
+    const cl::Program small = cached_program(
+        device, "build_small.cl",
+        defines + " -DKDRAY_SWAR_POPCOUNT=" + (device.info().type == "CPU" ? "1" : "0"));
     const cl::Program output = cached_program(device, "build_output.cl", defines);
     compute_aabbs = make_kernel(large, "kd_compute_aabbs");
     if (large_split_bins > 0) bin_large = make_kernel(large, "kd_bin_large_chunks");
