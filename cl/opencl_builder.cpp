@@ -64,7 +64,7 @@ Kernels::Kernels(const ClDevice& device, int large_split_bins) {
     const cl::Program large =
         cached_program(device, "build_large.cl",
                        defines + " -DKDRAY_LARGE_BINS=" + std::to_string(large_split_bins) + "u");
-    // CPU compilers may have no vector popcount (build_small.cl, kd_popcount8).
+    // CPU compilers may have no vector popcount (build_small_search.cl, kd_popcount8).
     const cl::Program small = cached_program(
         device, "build_small.cl",
         defines + " -DKDRAY_SWAR_POPCOUNT=" + (device.info().type == "CPU" ? "1" : "0"));

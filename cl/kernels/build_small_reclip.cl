@@ -1,0 +1,99 @@
+/* build_small_reclip.cl — re-clipping in the small-node stage (build_small.cl), kdray's one
+ * departure from Zhou et al.'s small stage: a node's own table of clipped candidates and masks. It
+ * holds no kernel of its own. */
+#ifndef KDRAY_BUILD_SMALL_RECLIP_CL
+#define KDRAY_BUILD_SMALL_RECLIP_CL
+
+#include "cl/kernels/build_small_search.cl"
+
+/* Re-clipping (not in Zhou et al.): the masks hold the small root's boxes, which no split inside
+ * its subtree clips, so a long diagonal triangle that a few splits have cut keeps the root's box:
+ * the SAH counts it on both sides of planes it does not reach inside the node, and its own
+ * candidates are not its bounds there. A node of at most KDRAY_RECLIP_REFS references of which
+ * some extend past its box gets a table of its own: those references' triangles clipped to the
+ * node's box (the large stage's clipping), the candidates and masks of them over the node's
+ * references alone, in private memory; its subtree is split with that table. Only the first such
+ * node on a path does this (its descendants use its table), so one table per work-item is live:
+ * the walk is depth first, and the nodes pending on the stack above a clipped node are all its
+ * descendants. */
+#define KDRAY_RECLIP_REFS 32u
+
+typedef struct KdClippedTable {
+    float candidates[KDRAY_RECLIP_REFS * 8]; /* per reference: its clipped box's candidate lanes */
+    uint masks[KDRAY_RECLIP_REFS * 16]; /* per reference: 8 lanes below, 8 above (side_masks) */
+    uchar ref[KDRAY_RECLIP_REFS];       /* its index in the small root's list */
+} KdClippedTable;
+
+/* The table of the node (box, its references `mask` over the small root's list from start), or 0
+ * when none of them extends past the box (clipping changes nothing). *mask becomes the node's
+ * references over the table; a triangle that misses the box leaves the node. */
+inline int kd_clip_node_table(KdBox box, ulong* mask, uint start, __global const float* ref_box,
+                              __global const uint* ref_tri, __global const float* triangles,
+                              KdClippedTable* t) {
+    int any_cut = 0;
+    for (ulong rest = *mask; rest != 0 && !any_cut; rest &= rest - 1) {
+        const KdBox b = kd_load_box(ref_box, start + kd_lowest_bit(rest));
+        any_cut = any(b.lo < box.lo) || any(b.hi > box.hi);
+    }
+    if (!any_cut) return 0;
+    uint n = 0;
+    for (ulong rest = *mask; rest != 0; rest &= rest - 1) {
+        const uint j = kd_lowest_bit(rest);
+        KdBox b = kd_load_box(ref_box, start + j);
+        if (any(b.lo < box.lo) || any(b.hi > box.hi)) {
+            b.lo = fmax(b.lo, box.lo);
+            b.hi = fmax(fmin(b.hi, box.hi), b.lo);
+            KdBox clipped;
+            __global const float* tri =
+                triangles + (size_t)ref_tri[start + j] * KDRAY_FLOATS_PER_TRIANGLE;
+            if (!kd_clip_triangle_bounds(tri, box, &clipped)) continue;
+            b.lo = fmin(fmax(b.lo, clipped.lo), b.hi);
+            b.hi = fmax(fmin(b.hi, clipped.hi), b.lo);
+        }
+        t->ref[n] = (uchar)j;
+        vstore8((float8)(b.lo.x, b.hi.x, b.lo.y, b.hi.y, b.lo.z, b.hi.z, 0.0f, 0.0f), n,
+                t->candidates);
+        ++n;
+    }
+    for (uint l = 0; l < n; ++l) {
+        const float8 pos = vload8(l, t->candidates);
+        const int8 planar_above = kd_planar_above_lanes(pos);
+        uint8 below_bits = (uint8)(0), above_bits = (uint8)(0);
+        for (uint m = 0; m < n; ++m) {
+            const float8 other = vload8(m, t->candidates);
+            int8 is_below, is_above;
+            kd_candidate_sides(pos, planar_above, other.s00224466, other.s11335577, &is_below,
+                               &is_above);
+            below_bits |= as_uint8(is_below) & (1u << m);
+            above_bits |= as_uint8(is_above) & (1u << m);
+        }
+        vstore8(below_bits, 0, t->masks + l * 16);
+        vstore8(above_bits, 1, t->masks + l * 16);
+    }
+    *mask = (1ul << n) - 1ul;
+    return 1;
+}
+
+/* kd_best_small_split over a clipped table. */
+inline uint kd_best_clipped_split(KdBox box, ulong mask, const KdClippedTable* t,
+                                  float cost_traversal, float cost_intersection,
+                                  float empty_bonus) {
+    KdSplitSearch s;
+    kd_start_split_search(&s, box, mask, cost_traversal, cost_intersection, empty_bonus);
+    for (ulong rest = mask; rest != 0; rest &= rest - 1) {
+        const uint l = kd_lowest_bit(rest);
+        kd_price_candidates(&s, vload8(l, t->candidates),
+                            convert_ulong8(vload8(0, t->masks + l * 16)),
+                            convert_ulong8(vload8(1, t->masks + l * 16)), l * 6);
+    }
+    return kd_cheapest_candidate(&s);
+}
+
+/* A mask over a clipped table as a mask over the small root's references. */
+inline ulong kd_root_mask(const KdClippedTable* t, ulong mask) {
+    ulong root = 0;
+    for (ulong rest = mask; rest != 0; rest &= rest - 1) root |= 1ul << t->ref[kd_lowest_bit(rest)];
+    return root;
+}
+
+#endif /* KDRAY_BUILD_SMALL_RECLIP_CL */
