@@ -29,6 +29,19 @@ void BufferPool::keep(cl::Buffer buffer, std::size_t bytes) {
     }
 }
 
+std::size_t BufferPool::release_oldest() {
+    if (kept_.empty()) return 0;
+    const std::size_t bytes = kept_.front().bytes;
+    bytes_ -= bytes;
+    kept_.erase(kept_.begin());
+    return bytes;
+}
+
+void BufferPool::move_into(BufferPool& other) {
+    for (Kept& kept : kept_) other.keep(std::move(kept.buffer), kept.bytes);
+    clear();
+}
+
 void BufferPool::clear() {
     kept_.clear();
     bytes_ = 0;

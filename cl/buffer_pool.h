@@ -6,9 +6,12 @@
 // 1.8k faults and 7 ms, build 141.7 -> 123.3 ms (median of 5 interleaved rounds of 7 builds);
 // Kitchen and Sponza, whose arrays glibc already reused, unchanged. A build counts in its device
 // bytes what it takes from the pool; what the pool keeps between builds is at most its capacity.
+//
+// DeviceMemory keeps a build's own spares in one too (without a capacity: it bounds them itself).
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include <CL/opencl.hpp>
@@ -18,17 +21,22 @@ namespace kdray {
 class BufferPool {
   public:
     /// capacity: the most bytes the pool keeps; beyond it the oldest buffers are released.
-    explicit BufferPool(std::size_t capacity = 0) : capacity_(capacity) {}
+    explicit BufferPool(std::size_t capacity = SIZE_MAX) : capacity_(capacity) {}
 
     /// The smallest kept buffer of bytes..limit bytes, removed from the pool, and its size in
     /// *taken_bytes; an empty cl::Buffer when none fits.
     cl::Buffer take(std::size_t bytes, std::size_t limit, std::size_t* taken_bytes);
     /// Keeps `buffer` (of `bytes`) for a later take.
     void keep(cl::Buffer buffer, std::size_t bytes);
+    /// Releases the oldest kept buffer; returns its size (0 when the pool is empty).
+    std::size_t release_oldest();
+    /// Gives every kept buffer to `other`, oldest first.
+    void move_into(BufferPool& other);
     /// Releases every kept buffer.
     void clear();
 
     std::size_t bytes() const { return bytes_; }
+    bool empty() const { return kept_.empty(); }
 
   private:
     struct Kept {

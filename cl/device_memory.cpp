@@ -37,23 +37,16 @@ DeviceArray DeviceMemory::allocate(std::size_t bytes, const std::string& what) {
     DeviceArray array;
     array.owner_ = this;
     // The smallest spare that fits and wastes at most half of itself (small requests may take any
-    // spare up to 4 KiB, the size of a page).
-    auto best = spares_.end();
+    // spare up to 4 KiB, the size of a page): the build's own, else one an earlier build left.
     const std::size_t limit = std::max<std::size_t>(2 * bytes, 4096);
-    for (auto it = spares_.begin(); it != spares_.end(); ++it)
-        if (it->bytes >= bytes && it->bytes <= limit &&
-            (best == spares_.end() || it->bytes < best->bytes))
-            best = it;
-    if (best != spares_.end()) {
-        array.buffer_ = std::move(best->buffer);
-        array.bytes_ = best->bytes;
-        spare_bytes_ -= array.bytes_;
-        spares_.erase(best);
+    std::size_t taken_bytes = 0;
+    array.buffer_ = spares_.take(bytes, limit, &taken_bytes);
+    if (array.buffer_()) {
+        array.bytes_ = taken_bytes;
         return array;  // already counted in current_
     }
-    std::size_t pooled_bytes = 0;
-    array.buffer_ = device_.buffer_pool().take(bytes, limit, &pooled_bytes);
-    array.bytes_ = pooled_bytes;
+    array.buffer_ = device_.buffer_pool().take(bytes, limit, &taken_bytes);
+    array.bytes_ = taken_bytes;
     if (!array.buffer_()) {
         array.buffer_ = device_.allocate(bytes, what);
         array.bytes_ = bytes;
@@ -64,23 +57,19 @@ DeviceArray DeviceMemory::allocate(std::size_t bytes, const std::string& what) {
 }
 
 void DeviceMemory::recycle(cl::Buffer buffer, std::size_t bytes) {
-    spares_.push_back({bytes, std::move(buffer)});
-    spare_bytes_ += bytes;
+    spares_.keep(std::move(buffer), bytes);
     // Spares beyond half of what is in use are given back, oldest first, so that recycling
     // raises the build's peak only a little while it keeps the buffers of the level before,
     // which the next level's arrays mostly fit (kernel time 52 -> 30 ms per build; with no bound
     // it was 30 ms too, but the peak 225 MB). Half rather than all of it: device bytes per
     // triangle Kitchen 901 -> 804, Robots 979 -> 889, Sponza 1026 -> 952, build time the same
     // within noise (kdray build --repeat 7, alternated twice, quiet 2-core PoCL).
-    while (!closing_ && 2 * spare_bytes_ > current_ - spare_bytes_ && !spares_.empty()) {
-        spare_bytes_ -= spares_.front().bytes;
-        current_ -= spares_.front().bytes;
-        spares_.erase(spares_.begin());
-    }
+    while (!closing_ && 2 * spares_.bytes() > current_ - spares_.bytes() && !spares_.empty())
+        current_ -= spares_.release_oldest();
 }
 
 DeviceMemory::~DeviceMemory() {
-    for (Spare& spare : spares_) device_.buffer_pool().keep(std::move(spare.buffer), spare.bytes);
+    spares_.move_into(device_.buffer_pool());
 }
 
 void DeviceMemory::reserve(DeviceArray& array, std::size_t bytes, std::size_t used,

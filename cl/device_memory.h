@@ -77,13 +77,8 @@ class DeviceMemory {
     friend class DeviceArray;
     void recycle(cl::Buffer buffer, std::size_t bytes);
 
-    struct Spare {
-        std::size_t bytes;
-        cl::Buffer buffer;
-    };
     ClDevice& device_;
-    std::vector<Spare> spares_;    // released buffers, for reuse
-    std::size_t spare_bytes_ = 0;  // their sum (also counted in current_)
+    BufferPool spares_;  // released buffers, for reuse (their bytes also counted in current_)
     bool closing_ = false;
     std::size_t current_ = 0;
     std::size_t peak_ = 0;

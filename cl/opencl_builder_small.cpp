@@ -31,7 +31,7 @@ std::vector<SmallBatch> small_batches(Build& b, cl_uint first_scale, std::size_t
     };
     std::vector<SmallBatch> batches;
     if (fits(b.small_refs, b.small_roots)) {
-        batches.push_back(SmallBatch{0, b.small_roots, 0, b.small_refs});
+        batches.push_back(SmallBatch{0, b.small_roots, 0, b.small_refs, {}, 0, {}});
         return batches;
     }
     std::vector<cl_uint> counts(b.small_roots);
@@ -44,7 +44,7 @@ std::vector<SmallBatch> small_batches(Build& b, cl_uint first_scale, std::size_t
         if (batch.roots > 0 && !fits(std::size_t(batch.refs) + counts[root], batch.roots + 1)) {
             const cl_uint ref_end = batch.ref_begin + batch.refs;
             batches.push_back(std::move(batch));
-            batch = SmallBatch{root, 0, ref_end, 0};
+            batch = SmallBatch{root, 0, ref_end, 0, {}, 0, {}};
         }
         // A root holds at most 64 references, so a batch of one always fits a sane limit.
         if (!fits(counts[root], 1))
