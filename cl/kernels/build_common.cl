@@ -127,6 +127,37 @@ KDRAY_HOT_INLINE int kd_clip_triangle_bounds(__global const float* tri, KdBox bo
     return 1;
 }
 
+/* A triangle's plane for kd_plane_misses_box: a corner, the normal, and the normal's rounding
+ * (a few ulps of |e1| |e2| per component). */
+typedef struct KdTrianglePlane {
+    float3 corner, normal;
+    float normal_error;
+} KdTrianglePlane;
+
+inline KdTrianglePlane kd_triangle_plane(__global const float* tri) {
+    KdTrianglePlane p;
+    p.corner = (float3)(tri[0], tri[1], tri[2]);
+    const float3 e1 = (float3)(tri[3], tri[4], tri[5]) - p.corner;
+    const float3 e2 = (float3)(tri[6], tri[7], tri[8]) - p.corner;
+    p.normal = cross(e1, e2);
+    p.normal_error = 1e-4f * length(e1) * length(e2);
+    return p;
+}
+
+/* Whether a triangle's plane misses the box: its corners all lie on one side of it (the normal's
+ * test of Akenine-Moller's triangle-box overlap), by more than the rounding of the normal, which
+ * a sliver or a collapsed triangle makes as large as the normal itself. */
+inline int kd_plane_misses_box(const KdTrianglePlane* p, KdBox box) {
+    const float3 centre = 0.5f * (box.lo + box.hi), half_extent = 0.5f * (box.hi - box.lo);
+    const float3 to_centre = centre - p->corner;
+    const float distance = dot(p->normal, to_centre), radius = dot(fabs(p->normal), half_extent);
+    /* The distances are off by the normal's rounding times the lever arm. */
+    const float reach = fabs(to_centre.x) + fabs(to_centre.y) + fabs(to_centre.z) + half_extent.x +
+                        half_extent.y + half_extent.z;
+    const float slack = 1e-5f * (fabs(distance) + radius) + p->normal_error * reach;
+    return fabs(distance) > radius + slack;
+}
+
 /* Index of the last of the n ascending `starts` that is <= x: the segment holding element x. */
 inline uint kd_find_segment(__global const uint* starts, uint n, uint x) {
     uint lo = 0, hi = n;

@@ -81,40 +81,24 @@ __kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const f
     vstore8(above, 1, side_masks + (size_t)(ref - ref_begin) * 16);
 }
 
-/* Whether the plane of triangle tri (9 floats) misses the box: its corners all lie on one side
- * of it (the normal's test of Akenine-Moller's triangle-box overlap), by more than the rounding
- * of the normal, which a sliver or a collapsed triangle makes as large as the normal itself. */
-inline int kd_plane_misses_box(__global const float* tri, KdBox box) {
-    const float3 a = (float3)(tri[0], tri[1], tri[2]);
-    const float3 e1 = (float3)(tri[3], tri[4], tri[5]) - a;
-    const float3 e2 = (float3)(tri[6], tri[7], tri[8]) - a;
-    const float3 n = cross(e1, e2);
-    const float3 centre = 0.5f * (box.lo + box.hi), half_extent = 0.5f * (box.hi - box.lo);
-    const float3 to_centre = centre - a;
-    const float distance = dot(n, to_centre), radius = dot(fabs(n), half_extent);
-    /* The normal is off by a few ulps of |e1| |e2| per component; the distances by that times
-     * the lever arm. */
-    const float reach = fabs(to_centre.x) + fabs(to_centre.y) + fabs(to_centre.z) + half_extent.x +
-                        half_extent.y + half_extent.z;
-    const float slack = 1e-5f * (fabs(distance) + radius) + 1e-4f * length(e1) * length(e2) * reach;
-    return fabs(distance) > radius + slack;
-}
-
 /* The masks carry boxes clipped to the small root (or to a re-clipping ancestor), not to the node,
  * so a triangle whose box straddles a split may still miss one child inside this node (a long
  * diagonal triangle past the corner of a deep node). A straddling triangle whose plane misses a
  * child's box leaves that child. */
 inline void kd_drop_missed_triangles(ulong* below, ulong* above, KdBox box, uint axis, float split,
-                                     uint start, const uchar* table_ref,
+                                     uint start, const KdClippedTable* table,
                                      __global const uint* ref_tri,
                                      __global const float* triangles) {
     for (ulong rest = *below & *above; rest != 0; rest &= rest - 1) {
         const ulong bit = rest & (0ul - rest);
         const uint j = kd_lowest_bit(rest);
-        const uint ref = start + (table_ref ? table_ref[j] : j);
-        __global const float* tri = triangles + (size_t)ref_tri[ref] * KDRAY_FLOATS_PER_TRIANGLE;
-        const int miss_below = kd_plane_misses_box(tri, kd_child_box(box, axis, split, 0));
-        const int miss_above = kd_plane_misses_box(tri, kd_child_box(box, axis, split, 1));
+        /* A re-clipped node's table holds its triangles' planes: no fetch from the triangles. */
+        const KdTrianglePlane plane =
+            table ? table->planes[j]
+                  : kd_triangle_plane(triangles +
+                                      (size_t)ref_tri[start + j] * KDRAY_FLOATS_PER_TRIANGLE);
+        const int miss_below = kd_plane_misses_box(&plane, kd_child_box(box, axis, split, 0));
+        const int miss_above = kd_plane_misses_box(&plane, kd_child_box(box, axis, split, 1));
         if (miss_above && !miss_below) *above &= ~bit;
         if (miss_below && !miss_above) *below &= ~bit;
     }
@@ -207,12 +191,12 @@ __kernel void kd_build_small_subtrees(
         const uint ref = best / 6, k = best % 6, axis = k / 2;
         float8 pos;
         ulong8 below, above;
-        const uchar* table_ref = 0;
+        const KdClippedTable* node_table = 0;
         if (node.on_table) {
             pos = vload8(ref, table.candidates);
             below = convert_ulong8(vload8(0, table.masks + ref * 16));
             above = convert_ulong8(vload8(1, table.masks + ref * 16));
-            table_ref = table.ref;
+            node_table = &table;
         } else {
             __global const ulong* masks = root_masks + (size_t)(ref - start) * 16;
             pos = kd_candidate_lanes(ref_box + (size_t)ref * 6);
@@ -233,7 +217,7 @@ __kernel void kd_build_small_subtrees(
             vstore8(above, 0, children[1]);
         }
         kd_drop_missed_triangles(&children[0][k], &children[1][k], node.box, axis, split, start,
-                                 table_ref, ref_tri, triangles);
+                                 node_table, ref_tri, triangles);
         if (at < budget) out[at] = (uint4)(axis, as_uint(split), 0, 0);
         KdPendingNode pending;
         pending.box = kd_child_box(node.box, axis, split, 1);

@@ -22,6 +22,7 @@ typedef struct KdClippedTable {
     float candidates[KDRAY_RECLIP_REFS * 8]; /* per reference: its clipped box's candidate lanes */
     uint masks[KDRAY_RECLIP_REFS * 16]; /* per reference: 8 lanes below, 8 above (side_masks) */
     uchar ref[KDRAY_RECLIP_REFS];       /* its index in the small root's list */
+    KdTrianglePlane planes[KDRAY_RECLIP_REFS]; /* per reference: its triangle's plane */
 } KdClippedTable;
 
 /* The table of the node (box, its references `mask` over the small root's list from start), or 0
@@ -40,17 +41,18 @@ inline int kd_clip_node_table(KdBox box, ulong* mask, uint start, __global const
     for (ulong rest = *mask; rest != 0; rest &= rest - 1) {
         const uint j = kd_lowest_bit(rest);
         KdBox b = kd_load_box(ref_box, start + j);
+        __global const float* tri =
+            triangles + (size_t)ref_tri[start + j] * KDRAY_FLOATS_PER_TRIANGLE;
         if (any(b.lo < box.lo) || any(b.hi > box.hi)) {
             b.lo = fmax(b.lo, box.lo);
             b.hi = fmax(fmin(b.hi, box.hi), b.lo);
             KdBox clipped;
-            __global const float* tri =
-                triangles + (size_t)ref_tri[start + j] * KDRAY_FLOATS_PER_TRIANGLE;
             if (!kd_clip_triangle_bounds(tri, box, &clipped)) continue;
             b.lo = fmin(fmax(b.lo, clipped.lo), b.hi);
             b.hi = fmax(fmin(b.hi, clipped.hi), b.lo);
         }
         t->ref[n] = (uchar)j;
+        t->planes[n] = kd_triangle_plane(tri);
         vstore8((float8)(b.lo.x, b.hi.x, b.lo.y, b.hi.y, b.lo.z, b.hi.z, 0.0f, 0.0f), n,
                 t->candidates);
         ++n;
