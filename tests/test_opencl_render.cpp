@@ -30,6 +30,10 @@ RenderSettings small_settings(int width, int height) {
     return s;
 }
 
+Light point_light(Vec3 position, Vec3 power) {
+    return Light{Light::Type::point, position, {}, power};
+}
+
 /// A camera outside the scene's box looking at its centre along a skew direction, so that rays
 /// cross split planes of every axis.
 Camera skew_camera(const Scene& scene) {
@@ -114,7 +118,7 @@ TEST_CASE("opencl render: only the effects a scene calls for") {
     RenderSettings settings = small_settings(32, 24);
 
     SUBCASE("a matte scene under a light: shadow rays, no secondary rays") {
-        settings.lights.push_back(Light{Light::Type::point, {0.5f, 3.0f, 0.5f}, {}, {5, 5, 5}});
+        settings.lights.push_back(point_light({0.5f, 3.0f, 0.5f}, {5, 5, 5}));
         const RenderInputs inputs = prepare_render(matte, settings, skew_camera(matte), 0);
         CHECK(inputs.effects.shadows);
         CHECK_FALSE(inputs.effects.reflection);
@@ -170,7 +174,7 @@ TEST_CASE("opencl render: prepare_opencl_renderer builds the program that frames
     scene.material_ids[0] = 1;
     RenderSettings settings = small_settings(8, 8);
     settings.max_depth = 2;
-    settings.lights.push_back(Light{Light::Type::point, {0.5f, 3.0f, 0.5f}, {}, {5, 5, 5}});
+    settings.lights.push_back(point_light({0.5f, 3.0f, 0.5f}, {5, 5, 5}));
     const RenderInputs inputs = prepare_render(scene, settings, skew_camera(scene), 0);
     REQUIRE(inputs.effects.bits() == (KDRAY_EFFECT_SHADOWS | KDRAY_EFFECT_REFLECTION));
 
@@ -247,8 +251,7 @@ TEST_CASE("opencl render: packets of primary rays give the reference's hits bit 
         const KdTree tree = build_reference(scene);
         RenderSettings settings = small_settings(23, 19);
         const Aabb b = scene.bounds();
-        settings.lights.push_back(
-            Light{Light::Type::point, b.hi + (b.hi - b.lo) * 0.25f, {}, {40, 40, 40}});
+        settings.lights.push_back(point_light(b.hi + (b.hi - b.lo) * 0.25f, {40, 40, 40}));
         const RenderInputs inputs = prepare_render(scene, settings, skew_camera(scene), 0);
         REQUIRE(inputs.effects.bits() == KDRAY_EFFECT_SHADOWS);
         check_packets(scene, tree, inputs);
@@ -264,10 +267,9 @@ TEST_CASE("opencl render: packets of primary rays give the reference's hits bit 
             CAPTURE(spp);
             RenderSettings settings = small_settings(29, 21);
             settings.spp = spp;
+            settings.lights.push_back(point_light(b.lo + size * 0.51f, {2, 2, 2}));
             settings.lights.push_back(
-                Light{Light::Type::point, b.lo + size * 0.51f, {}, {2, 2, 2}});
-            settings.lights.push_back(
-                Light{Light::Type::point, b.lo + size * Vec3{0.2f, 0.8f, 0.37f}, {}, {1, 2, 1}});
+                point_light(b.lo + size * Vec3{0.2f, 0.8f, 0.37f}, {1, 2, 1}));
             settings.lights.push_back(
                 Light{Light::Type::directional, {}, Vec3{-0.3f, -1.0f, -0.2f}, {0.5f, 0.5f, 0.5f}});
             check_packets(scene, tree, prepare_render(scene, settings, skew_camera(scene), 5));
@@ -281,8 +283,7 @@ TEST_CASE("opencl render: packets of primary rays give the reference's hits bit 
         const Aabb b = scene.bounds();
         RenderSettings settings = small_settings(2048, 40);
         settings.spp = 3;
-        settings.lights.push_back(
-            Light{Light::Type::point, b.lo + (b.hi - b.lo) * 0.49f, {}, {2, 2, 2}});
+        settings.lights.push_back(point_light(b.lo + (b.hi - b.lo) * 0.49f, {2, 2, 2}));
         check_packets(scene, tree, prepare_render(scene, settings, skew_camera(scene), 9));
     }
     SUBCASE("more lights than a mask holds: shadow rays one at a time, the same image") {
@@ -292,8 +293,8 @@ TEST_CASE("opencl render: packets of primary rays give the reference's hits bit 
         const Aabb b = scene.bounds();
         for (kd_u32 i = 0; i <= KDRAY_PACKET_SHADOW_LIGHTS; ++i) {
             const float f = float(i) / float(KDRAY_PACKET_SHADOW_LIGHTS);
-            settings.lights.push_back(Light{
-                Light::Type::point, b.lo + (b.hi - b.lo) * Vec3{f, 1.3f, 1.0f - f}, {}, {1, 1, 1}});
+            settings.lights.push_back(
+                point_light(b.lo + (b.hi - b.lo) * Vec3{f, 1.3f, 1.0f - f}, {1, 1, 1}));
         }
         check_packets(scene, tree, prepare_render(scene, settings, skew_camera(scene), 0));
     }

@@ -158,6 +158,9 @@ inline int kd_plane_misses_box(const KdTrianglePlane* p, KdBox box) {
     return fabs(distance) > radius + slack;
 }
 
+/* The index of the lowest set bit of a mask of a small root's references (bits != 0). */
+inline uint kd_lowest_bit(ulong bits) { return (uint)popcount((bits & (0ul - bits)) - 1ul); }
+
 /* Index of the last of the n ascending `starts` that is <= x: the segment holding element x. */
 inline uint kd_find_segment(__global const uint* starts, uint n, uint x) {
     uint lo = 0, hi = n;

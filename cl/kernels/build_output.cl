@@ -97,8 +97,7 @@ __kernel void kd_write_small_subtrees(
         nodes[at + j] = kd_make_leaf(r.y, first + offset);
         uint out = first + offset;
         for (ulong rest = ((ulong)r.w << 32) | (ulong)r.z; rest != 0; rest &= rest - 1) {
-            const uint i = (uint)popcount((rest & (0ul - rest)) - 1ul);
-            leaf_indices[out++] = small_ref_tri[start + i];
+            leaf_indices[out++] = small_ref_tri[start + kd_lowest_bit(rest)];
         }
     }
 }

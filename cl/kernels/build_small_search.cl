@@ -155,11 +155,6 @@ inline uint kd_cheapest_candidate(const KdSplitSearch* s) {
     return min(index2.lo, index2.hi);
 }
 
-/* The lowest set bit's index. */
-inline uint kd_lowest_bit(ulong bits) {
-    return (uint)popcount((bits & (0ul - bits)) - 1ul);
-}
-
 /* The split of a node whose mask is over the small root's references (start..), by their masks
  * in root_masks. */
 inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global const float* ref_box,
