@@ -104,6 +104,9 @@ std::size_t round_up(std::size_t n, std::size_t multiple) {
 struct RenderBuffers {
     cl::Buffer nodes, leaf_indices, triangles, material_ids, materials, lights, bounds;
     cl::Buffer rgb, hits, normals, counts, traced, occluded;
+    /// The scene's vertex normals when has_vertex_normals, else any buffer (never read).
+    cl::Buffer vertex_normals;
+    kd_u32 has_vertex_normals = 0;
 };
 
 /// Every argument of kd_render_pixels (render.cl) and of kd_trace_camera_packets, in their
@@ -112,7 +115,8 @@ void set_pixel_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& vi
                     kd_u32 outputs) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.material_ids, b.materials,
                     b.lights, b.bounds, view, kd_u32(0), kd_u32(0), b.rgb, b.hits, b.normals,
-                    b.counts, b.traced, b.occluded, outputs);
+                    b.counts, b.traced, b.occluded, outputs, b.vertex_normals,
+                    b.has_vertex_normals);
 }
 void set_packet_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& view) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.bounds, view, kd_u32(0),
@@ -120,7 +124,8 @@ void set_packet_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& v
 }
 void set_shadow_packet_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& view) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.bounds, view, kd_u32(0),
-                    kd_u32(0), b.lights, b.traced, b.occluded);
+                    kd_u32(0), b.lights, b.traced, b.occluded, b.vertex_normals,
+                    b.has_vertex_normals);
 }
 
 /// The launch of `rows` image rows from `first_row`, in tiles.
@@ -164,7 +169,7 @@ void prepare_opencl_renderer(ClDevice& device, const RenderInputs& inputs) {
     with_cl_context("preparing the render kernel on " + device.info().name, [&] {
         const cl::Buffer dummy = device.allocate(sizeof(KdHit), "render kernel warm-up buffer");
         const RenderBuffers buffers{dummy, dummy, dummy, dummy, dummy, dummy, dummy,
-                                    dummy, dummy, dummy, dummy, dummy, dummy};
+                                    dummy, dummy, dummy, dummy, dummy, dummy, dummy};
         set_pixel_args(kernel, buffers, view, 0);
         enqueue_rows(device, kernel, 1, 0, 1);
         if (packets) {
@@ -207,6 +212,9 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
                                 : upload(device, tree.leaf_indices, "leaf triangle indices");
     b.triangles = built_here ? on_device->triangles : upload(device, scene.triangles, "triangles");
     b.material_ids = upload(device, scene.material_ids, "material ids");
+    b.has_vertex_normals = scene.has_vertex_normals();
+    b.vertex_normals =
+        b.has_vertex_normals ? upload(device, scene.vertex_normals, "vertex normals") : b.triangles;
     b.materials = upload(device, inputs.materials, "materials");
     b.lights = upload(device, inputs.lights, "lights");
     b.bounds = upload(device, bounds, "scene bounds");

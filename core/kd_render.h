@@ -5,10 +5,11 @@
  *
  * Shading is Whitted-style: emission, Lambert diffuse and a Blinn-Phong highlight under point and
  * directional lights with shadow rays, ideal mirror reflection, and dielectric reflection and
- * refraction weighted by the Fresnel equations, up to the render file's max_depth. Which of
- * shadows, reflection and refraction exist at all is decided per frame from its materials and
- * lights: in a kernel by -DKDRAY_COMPILED_EFFECTS (code a scene does not call for is not even
- * compiled), on the host by KdView.effects.
+ * refraction weighted by the Fresnel equations, up to the render file's max_depth; smooth where
+ * the scene has vertex normals (kd_shading_normal). Which of shadows, reflection and refraction
+ * exist at all is decided per frame from its materials and lights: in a kernel by
+ * -DKDRAY_COMPILED_EFFECTS (code a scene does not call for is not even compiled), on the host by
+ * KdView.effects.
  */
 #ifndef KDRAY_KD_RENDER_H
 #define KDRAY_KD_RENDER_H
@@ -40,6 +41,9 @@ typedef struct KdSceneView {
     KDRAY_GLOBAL const KdNode* nodes;
     KDRAY_GLOBAL const kd_u32* leaf_indices;
     KDRAY_GLOBAL const kd_f32* triangles;
+    /* Unit normals at each triangle's corners (KDRAY_FLOATS_PER_TRIANGLE per triangle), or 0:
+     * the scene shades flat. */
+    KDRAY_GLOBAL const kd_f32* vertex_normals;
     KDRAY_GLOBAL const kd_u32* material_ids;
     KDRAY_GLOBAL const KdMaterial* materials;
     KDRAY_GLOBAL const KdLight* lights;
@@ -127,6 +131,25 @@ KDRAY_HOT_INLINE void kd_facing_normal(KDRAY_GLOBAL const kd_f32* tri, const kd_
     if (kd_dot3(n, dir) > 0.0f) kd_set3(n, -n[0], -n[1], -n[2]);
 }
 
+/* The shading normal at a hit whose geometric normal, facing the ray, is ng: the corners' normals
+ * interpolated at the hit's barycentrics, made unit length and turned to ng's side (a mesh's
+ * normals need not agree with its winding, and either side of a triangle may be seen); ng itself
+ * in a scene without vertex normals, or where the corners' normals cancel. */
+KDRAY_HOT_INLINE void kd_shading_normal(const KdSceneView* scene, KdHit hit, const kd_f32* ng,
+                                        kd_f32* ns) {
+    kd_set3(ns, ng[0], ng[1], ng[2]);
+    if (!scene->vertex_normals) return;
+    KDRAY_GLOBAL const kd_f32* vn =
+        scene->vertex_normals + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE;
+    const kd_f32 w = 1.0f - hit.u - hit.v;
+    kd_f32 n[3];
+    for (int a = 0; a < 3; ++a) n[a] = w * vn[a] + hit.u * vn[3 + a] + hit.v * vn[6 + a];
+    const kd_f32 length2 = kd_dot3(n, n);
+    if (!(length2 > 0.0f)) return;
+    const kd_f32 scale = (kd_dot3(n, ng) < 0.0f ? -1.0f : 1.0f) / KDRAY_SQRT(length2);
+    kd_set3(ns, n[0] * scale, n[1] * scale, n[2] * scale);
+}
+
 /* Unpolarised Fresnel reflectance of a dielectric for cos_i = cos(incidence) > 0 and
  * eta = n_incident / n_transmitted; 1 on total internal reflection. *cos_t returns the
  * transmitted angle's cosine. */
@@ -140,6 +163,26 @@ KDRAY_INLINE kd_f32 kd_fresnel(kd_f32 cos_i, kd_f32 eta, kd_f32* cos_t) {
     const kd_f32 r_s = (eta * cos_i - *cos_t) / (eta * cos_i + *cos_t);
     const kd_f32 r_p = (cos_i - eta * *cos_t) / (cos_i + eta * *cos_t);
     return 0.5f * (r_s * r_s + r_p * r_p);
+}
+
+/* Whether the shading normal ns may bend a hit's secondary rays (dir: the incoming ray; ng: the
+ * geometric normal, facing it; eta: n_incident / n_transmitted at a dielectric, 0 where nothing
+ * refracts): not when a ray it bends would leave on the wrong side of the surface, the mirror
+ * ray into it or the refracted ray back out, as a normal interpolated across a coarse mesh does
+ * near its silhouette; the geometric normal bends every ray the right way. */
+KDRAY_HOT_INLINE int kd_shading_normal_bends(const kd_f32* dir, const kd_f32* ng, const kd_f32* ns,
+                                             kd_f32 eta) {
+    const kd_f32 cos_i = -kd_dot3(dir, ns);
+    if (!(cos_i > 0.0f)) return 0;
+    const kd_f32 dir_ng = kd_dot3(dir, ng), ns_ng = kd_dot3(ns, ng);
+    if (!(dir_ng + 2.0f * cos_i * ns_ng > 0.0f)) return 0;
+    if (eta > 0.0f) {
+        const kd_f32 sin2_t = eta * eta * (1.0f - cos_i * cos_i);
+        if (sin2_t < 1.0f &&
+            !(eta * dir_ng + (eta * cos_i - KDRAY_SQRT(1.0f - sin2_t)) * ns_ng < 0.0f))
+            return 0;
+    }
+    return 1;
 }
 
 /* A ray waiting to be traced, with the share of the pixel it carries. */
@@ -219,13 +262,14 @@ KDRAY_HOT_INLINE KdRay kd_shadow_ray(const KdView* view, const kd_f32* p, const 
     return shadow;
 }
 
-/* Direct light at p (normal n, facing the viewer) for the eye direction `dir`: diffuse and
- * highlight under every light, each behind a shadow ray; with shadows off, under the headlight.
+/* Direct light at p (geometric normal ng, facing the viewer; shading normal ns) for the eye
+ * direction `dir`: diffuse and highlight by ns under every light, each behind a shadow ray that
+ * leaves from ng's side; with shadows off, under the headlight.
  * occluded, when not 0, says which of the shadow rays from p are blocked (bit i for light i, as
  * kd_trace_shadow_packets traced them); else each shadow ray is traced here. */
 KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
                                       KDRAY_GLOBAL const KdMaterial* m, const kd_f32* p,
-                                      const kd_f32* n, const kd_f32* dir,
+                                      const kd_f32* ng, const kd_f32* ns, const kd_f32* dir,
                                       KDRAY_GLOBAL const kd_u32* occluded, kd_f32* out,
                                       KdRayCounts* rays) {
     const kd_u32 light_count = kd_shining_lights(view);
@@ -233,19 +277,19 @@ KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* vi
     for (kd_u32 i = 0; i < lights; ++i) {
         kd_f32 to_light[3], irradiance[3], distance;
         kd_light_at(scene, view, light_count, i, p, to_light, irradiance, &distance);
-        const kd_f32 cos_l = kd_dot3(n, to_light);
+        const kd_f32 cos_l = kd_dot3(ns, to_light);
         if (cos_l <= 0.0f) continue;
         if (light_count != 0u) {
             rays->shadow += 1u;
             if (occluded ? (*occluded >> i) & 1u
-                         : kd_scene_occluded(scene, kd_shadow_ray(view, p, n, to_light, distance)))
+                         : kd_scene_occluded(scene, kd_shadow_ray(view, p, ng, to_light, distance)))
                 continue;
         }
         kd_f32 highlight = 0.0f;
         if (m->flags & KDRAY_MATERIAL_HIGHLIGHT) {
             kd_f32 h[3] = {to_light[0] - dir[0], to_light[1] - dir[1], to_light[2] - dir[2]};
             kd_normalize3(h);
-            const kd_f32 cos_h = kd_dot3(n, h);
+            const kd_f32 cos_h = kd_dot3(ns, h);
             /* Normalised Blinn-Phong: (Ns + 8) / (8 pi) keeps the highlight's energy fixed. */
             if (cos_h > 0.0f)
                 highlight = (m->shininess + 8.0f) / (8.0f * KDRAY_PI) *
@@ -268,23 +312,25 @@ KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdV
                                              kd_f32* first_normal) {
     rays->primary += 1u;
     const KdHit hit = traced ? *traced : kd_scene_closest(scene, primary);
-    kd_f32 n[3] = {0.0f, 0.0f, 0.0f};
+    kd_f32 ng[3] = {0.0f, 0.0f, 0.0f};
     if (hit.prim != KDRAY_NO_HIT)
         kd_facing_normal(scene->triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE,
-                         primary.dir, n);
+                         primary.dir, ng);
     if (first_hit) {
         *first_hit = hit;
-        kd_set3(first_normal, n[0], n[1], n[2]);
+        kd_set3(first_normal, ng[0], ng[1], ng[2]);
     }
     if (hit.prim == KDRAY_NO_HIT) {
         for (int c = 0; c < 3; ++c) rgb[c] = 0.0f + view->background[c];
         return;
     }
     KDRAY_GLOBAL const KdMaterial* m = scene->materials + scene->material_ids[hit.prim];
-    kd_f32 p[3], direct[3] = {0.0f, 0.0f, 0.0f};
+    kd_f32 p[3], ns[3], direct[3] = {0.0f, 0.0f, 0.0f};
     kd_hit_point(&primary, hit.t, p);
+    kd_shading_normal(scene, hit, ng, ns);
     const kd_f32 surface = 1.0f - m->transmit_fraction;
-    if (surface > 0.0f) kd_direct_light(scene, view, m, p, n, primary.dir, occluded, direct, rays);
+    if (surface > 0.0f)
+        kd_direct_light(scene, view, m, p, ng, ns, primary.dir, occluded, direct, rays);
     for (int c = 0; c < 3; ++c) rgb[c] = 0.0f + (m->emission[c] + surface * direct[c]);
 }
 
@@ -316,15 +362,15 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
         else
             rays->refraction += 1u;
         const KdHit hit = r.kind == 0u && traced ? *traced : kd_scene_closest(scene, r.ray);
-        kd_f32 n[3] = {0.0f, 0.0f, 0.0f};
+        kd_f32 ng[3] = {0.0f, 0.0f, 0.0f};
         KDRAY_GLOBAL const kd_f32* tri = scene->triangles;
         if (hit.prim != KDRAY_NO_HIT) {
             tri += (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE;
-            kd_facing_normal(tri, r.ray.dir, n);
+            kd_facing_normal(tri, r.ray.dir, ng);
         }
         if (r.kind == 0u && first_hit) {
             *first_hit = hit;
-            kd_set3(first_normal, n[0], n[1], n[2]);
+            kd_set3(first_normal, ng[0], ng[1], ng[2]);
         }
         if (hit.prim == KDRAY_NO_HIT) {
             for (int c = 0; c < 3; ++c) rgb[c] += r.weight[c] * view->background[c];
@@ -333,23 +379,22 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
 
         /* Emission and direct light on the part of the surface that is not dielectric. */
         KDRAY_GLOBAL const KdMaterial* m = scene->materials + scene->material_ids[hit.prim];
-        kd_f32 p[3], direct[3] = {0.0f, 0.0f, 0.0f};
+        kd_f32 p[3], ns[3], direct[3] = {0.0f, 0.0f, 0.0f};
         kd_hit_point(&r.ray, hit.t, p);
+        kd_shading_normal(scene, hit, ng, ns);
         const kd_f32 surface = 1.0f - m->transmit_fraction;
         if (surface > 0.0f)
-            kd_direct_light(scene, view, m, p, n, r.ray.dir, r.kind == 0u ? occluded : 0, direct,
-                            rays);
+            kd_direct_light(scene, view, m, p, ng, ns, r.ray.dir, r.kind == 0u ? occluded : 0,
+                            direct, rays);
         for (int c = 0; c < 3; ++c) rgb[c] += r.weight[c] * (m->emission[c] + surface * direct[c]);
         if (r.depth >= view->max_depth) continue;
 
         /* Secondary rays: the mirror, and the dielectric's Fresnel-weighted pair. */
-        const kd_f32 cos_i = -kd_dot3(r.ray.dir, n);
-        kd_f32 reflect_dir[3], reflect_w[3] = {0.0f, 0.0f, 0.0f};
-        for (int a = 0; a < 3; ++a) reflect_dir[a] = r.ray.dir[a] + 2.0f * cos_i * n[a];
-        if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFLECTION) && (m->flags & KDRAY_MATERIAL_MIRROR))
-            for (int c = 0; c < 3; ++c) reflect_w[c] = r.weight[c] * surface * m->specular[c];
-        if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFRACTION) &&
-            (m->flags & KDRAY_MATERIAL_DIELECTRIC) && m->transmit_fraction > 0.0f) {
+        const int dielectric = KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFRACTION) &&
+                               (m->flags & KDRAY_MATERIAL_DIELECTRIC) &&
+                               m->transmit_fraction > 0.0f;
+        kd_f32 eta = 0.0f;
+        if (dielectric) {
             /* The geometric normal faces the ray, so the ray enters when it opposes the
              * triangle's own winding normal; kdray's OBJ meshes give no inside/outside, so
              * entering is judged from the winding: counter-clockwise faces outwards. */
@@ -357,8 +402,15 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
             const kd_f32 e2[3] = {tri[6] - tri[0], tri[7] - tri[1], tri[8] - tri[2]};
             const kd_f32 wn[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                                   e1[0] * e2[1] - e1[1] * e2[0]};
-            const int entering = kd_dot3(wn, r.ray.dir) < 0.0f;
-            const kd_f32 eta = entering ? 1.0f / m->ior : m->ior;
+            eta = kd_dot3(wn, r.ray.dir) < 0.0f ? 1.0f / m->ior : m->ior;
+        }
+        const kd_f32* n = kd_shading_normal_bends(r.ray.dir, ng, ns, eta) ? ns : ng;
+        const kd_f32 cos_i = -kd_dot3(r.ray.dir, n);
+        kd_f32 reflect_dir[3], reflect_w[3] = {0.0f, 0.0f, 0.0f};
+        for (int a = 0; a < 3; ++a) reflect_dir[a] = r.ray.dir[a] + 2.0f * cos_i * n[a];
+        if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFLECTION) && (m->flags & KDRAY_MATERIAL_MIRROR))
+            for (int c = 0; c < 3; ++c) reflect_w[c] = r.weight[c] * surface * m->specular[c];
+        if (dielectric) {
             kd_f32 cos_t;
             const kd_f32 fresnel = kd_fresnel(cos_i, eta, &cos_t);
             kd_f32 refract_w[3];
@@ -372,7 +424,7 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
                 kd_f32 org[3], dir[3];
                 for (int a = 0; a < 3; ++a) {
                     dir[a] = eta * r.ray.dir[a] + (eta * cos_i - cos_t) * n[a];
-                    org[a] = p[a] - n[a] * view->ray_epsilon;
+                    org[a] = p[a] - ng[a] * view->ray_epsilon;
                 }
                 kd_normalize3(dir);
                 stack[pending++] = kd_pending(org, dir, refract_w, r.depth + 1u, 2u);
@@ -381,7 +433,7 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
         if (KDRAY_FMAX(reflect_w[0], KDRAY_FMAX(reflect_w[1], reflect_w[2])) >
             KDRAY_MIN_PATH_WEIGHT) {
             kd_f32 org[3];
-            for (int a = 0; a < 3; ++a) org[a] = p[a] + n[a] * view->ray_epsilon;
+            for (int a = 0; a < 3; ++a) org[a] = p[a] + ng[a] * view->ray_epsilon;
             stack[pending++] = kd_pending(org, reflect_dir, reflect_w, r.depth + 1u, 1u);
         }
     }

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -46,6 +47,41 @@ std::string read_whole_file(const std::filesystem::path& path) {
 
 Vec3 vec3(const tinyobj::real_t* v) {
     return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
+}
+
+/// scene.vertex_normals from each corner's `vn` index into normals (-1: none): the normal made
+/// unit length, in double; a corner without one, or with a zero normal, gets its triangle's
+/// geometric normal, so that it shades flat. The OBJ's normals are finite (validate_obj).
+void set_vertex_normals(Scene& scene, const std::vector<int>& corner_normal,
+                        const std::vector<tinyobj::real_t>& normals) {
+    const std::size_t n = scene.triangle_count();
+    scene.vertex_normals.resize(n * KDRAY_FLOATS_PER_TRIANGLE);
+    auto unit = [](const double* v, float* out) {
+        const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if (!(len > 0.0) || !std::isfinite(len)) return false;
+        for (int a = 0; a < 3; ++a) out[a] = static_cast<float>(v[a] / len);
+        return true;
+    };
+    for (std::size_t t = 0; t < n; ++t) {
+        const float* p = &scene.triangles[t * KDRAY_FLOATS_PER_TRIANGLE];
+        double e1[3], e2[3];
+        for (int a = 0; a < 3; ++a)
+            e1[a] = double(p[3 + a]) - p[a], e2[a] = double(p[6 + a]) - p[a];
+        const double geometric[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                     e1[0] * e2[1] - e1[1] * e2[0]};
+        for (int corner = 0; corner < 3; ++corner) {
+            float* out = &scene.vertex_normals[t * KDRAY_FLOATS_PER_TRIANGLE + 3 * corner];
+            const int index = corner_normal[3 * t + corner];
+            if (index >= 0 && 3 * std::size_t(index) + 2 < normals.size()) {
+                const double given[3] = {normals[3 * std::size_t(index)],
+                                         normals[3 * std::size_t(index) + 1],
+                                         normals[3 * std::size_t(index) + 2]};
+                if (unit(given, out)) continue;
+            }
+            // A zero-area triangle has no normal either; it is never hit.
+            if (!unit(geometric, out)) std::fill(out, out + 3, 0.0f);
+        }
+    }
 }
 
 Material to_material(const tinyobj::material_t& m) {
@@ -150,6 +186,9 @@ Scene load_obj(const std::filesystem::path& path) {
     const std::vector<tinyobj::real_t>& vertices = reader.GetAttrib().vertices;
     scene.triangles.reserve(prescan.triangles * KDRAY_FLOATS_PER_TRIANGLE);
     scene.material_ids.reserve(prescan.triangles);
+    // Each corner's `vn` index (-1: none), made into scene.vertex_normals once all are known.
+    std::vector<int> normal_indices;
+    bool any_normal = false;
     for (const tinyobj::shape_t& shape : reader.GetShapes()) {
         const tinyobj::mesh_t& mesh = shape.mesh;
         std::size_t offset = 0;
@@ -163,18 +202,24 @@ Scene load_obj(const std::filesystem::path& path) {
                 default_needed = true;
             // With triangulate = true every face has 3 vertices; a fan keeps any other safe.
             for (std::size_t k = 1; k + 1 < count; ++k) {
+                int corner_normal[3];
+                int c = 0;
                 for (std::size_t corner : {std::size_t{0}, k, k + 1}) {
-                    const auto v =
-                        static_cast<std::size_t>(mesh.indices[offset + corner].vertex_index);
+                    const tinyobj::index_t& index = mesh.indices[offset + corner];
+                    const auto v = static_cast<std::size_t>(index.vertex_index);
                     for (int axis = 0; axis < 3; ++axis)
                         scene.triangles.push_back(static_cast<float>(vertices[3 * v + axis]));
+                    corner_normal[c++] = index.normal_index;
+                    any_normal = any_normal || index.normal_index >= 0;
                 }
+                normal_indices.insert(normal_indices.end(), corner_normal, corner_normal + 3);
                 scene.material_ids.push_back(id);
             }
             offset += count;
         }
     }
     if (default_needed) scene.materials.push_back(Material{.name = "default"});
+    if (any_normal) set_vertex_normals(scene, normal_indices, reader.GetAttrib().normals);
 
     if (scene.triangle_count() == 0) throw Error(name + ": the scene has no triangles");
     if (scene.triangle_count() != prescan.triangles)

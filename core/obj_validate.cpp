@@ -204,7 +204,7 @@ class ObjScanner {
             return;
         }
         if (keyword == "vn") {
-            result_.normals += blank_follows;
+            if (blank_follows) scan_normal(p, e);
             return;
         }
         if (keyword == "mtllib") return scan_mtllib(p, e);
@@ -214,14 +214,26 @@ class ObjScanner {
     void scan_vertex(const char* p, const char* e) {
         int count = 0;
         for (std::string_view token; !(token = next_token(p, e)).empty(); ++count)
-            check_coordinate(token);
+            check_number(token, "vertex coordinate");
         if (count != 3 && count != 4 && count != 6)
             fail("vertex has " + std::to_string(count) +
                  " numbers; expected 'x y z', 'x y z w' or 'x y z r g b'");
         ++result_.vertices;
     }
 
-    void check_coordinate(std::string_view token) const {
+    /// A shading normal: three finite numbers (kdray shades with them; tinyobjloader would read a
+    /// missing one as 0 and a NaN as NaN).
+    void scan_normal(const char* p, const char* e) {
+        int count = 0;
+        for (std::string_view token; !(token = next_token(p, e)).empty(); ++count)
+            check_number(token, "normal component");
+        if (count != 3)
+            fail("normal has " + std::to_string(count) + " numbers; expected 'vn x y z'");
+        ++result_.normals;
+    }
+
+    /// A number of a `v` or `vn` line (`what` names it in the error): finite as a 32-bit float.
+    void check_number(std::string_view token, const char* what) const {
         if (is_plain_float(token)) return;
         std::string_view digits = token;
         // tinyobjloader accepts a leading '+', which from_chars does not.
@@ -231,16 +243,16 @@ class ObjScanner {
         const char* const last = digits.data() + digits.size();
         auto [ptr, ec] = std::from_chars(digits.data(), last, value);
         if (ec == std::errc::invalid_argument || ptr != last)
-            fail("vertex coordinate '" + printable(token) + "' is not a number");
+            fail(std::string(what) + " '" + printable(token) + "' is not a number");
         if (ec == std::errc::result_out_of_range) {
             // from_chars reports underflow and overflow alike; strtod tells them apart (a value
             // too small for a double reads as zero, which is harmless).
             value = std::strtod(std::string(digits).c_str(), nullptr);
         }
         if (!std::isfinite(value))
-            fail("vertex coordinate '" + printable(token) + "' is not a finite number");
+            fail(std::string(what) + " '" + printable(token) + "' is not a finite number");
         if (std::fabs(value) > std::numeric_limits<float>::max())
-            fail("vertex coordinate '" + printable(token) +
+            fail(std::string(what) + " '" + printable(token) +
                  "' is not a finite number as a 32-bit float");
     }
 

@@ -116,6 +116,7 @@ FrameResult render_reference(const KdTree& tree, const Scene& scene, const Rende
     KdSceneView scene_view{in.nodes,
                            in.leaf_indices,
                            in.triangles,
+                           scene.has_vertex_normals() ? scene.vertex_normals.data() : nullptr,
                            scene.material_ids.data(),
                            inputs.materials.data(),
                            inputs.lights.data(),
@@ -143,7 +144,8 @@ FrameResult render_reference(const KdTree& tree, const Scene& scene, const Rende
                     counts[i].primary = view.spp;
                     continue;
                 }
-                const KdPixel p = kd_render_pixel(&scene_view, &view, x, kd_u32(y), nullptr, nullptr, 0);
+                const KdPixel p =
+                    kd_render_pixel(&scene_view, &view, x, kd_u32(y), nullptr, nullptr, 0);
                 frame.hits.hits[i] = p.centre_hit;
                 if (inputs.normals) frame.hits.normals[i] = {p.normal[0], p.normal[1], p.normal[2]};
                 for (int c = 0; c < 3; ++c) frame.image.rgb[3 * i + c] = p.rgb[c];

@@ -47,6 +47,10 @@ struct Scene {
     std::filesystem::path path;
     /// KDRAY_FLOATS_PER_TRIANGLE floats per triangle: v0.xyz v1.xyz v2.xyz.
     std::vector<float> triangles;
+    /// Shading normals, KDRAY_FLOATS_PER_TRIANGLE floats per triangle (unit normals at v0, v1,
+    /// v2), from the OBJ's `vn`; empty when no face gives any, and the shading is then flat (the
+    /// geometric normal). A corner without a usable `vn` has its triangle's geometric normal.
+    std::vector<float> vertex_normals;
     /// Index into materials for every triangle. Triangles without a material use the last entry,
     /// a grey diffuse default that the loader appends only when some triangle needs it.
     std::vector<kd_u32> material_ids;
@@ -68,6 +72,7 @@ struct Scene {
     }
     /// The scene's bounds; this is the root box of every tree built over it.
     Aabb bounds() const;
+    bool has_vertex_normals() const { return !vertex_normals.empty(); }
 };
 
 /// Counts the zero-area triangles into scene.zero_area_triangles and collapses each to its first

@@ -114,6 +114,33 @@ TEST_CASE("v/vt/vn face forms and vertex colours load") {
     CHECK(load_obj(path).triangle_count() == 3);
 }
 
+TEST_CASE("vertex normals load per corner, unit length; corners without one shade flat") {
+    TempDir dir;
+    // Triangle 0 wound counter-clockwise seen from +z: its geometric normal is +z.
+    const fs::path path = dir.write("normals.obj",
+                                    "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+                                    "vn 0 0 2\nvn 3 0 4\nvn 0 0 0\n"
+                                    "f 1//1 2//2 3//3\nf 2 4 3\n");
+    const Scene scene = load_obj(path);
+    REQUIRE(scene.triangle_count() == 2);
+    REQUIRE(scene.vertex_normals.size() == 2 * KDRAY_FLOATS_PER_TRIANGLE);
+    auto normal = [&](std::size_t t, int corner) {
+        const float* n = &scene.vertex_normals[t * KDRAY_FLOATS_PER_TRIANGLE + 3 * corner];
+        return Vec3{n[0], n[1], n[2]};
+    };
+    CHECK(normal(0, 0) == Vec3{0, 0, 1});
+    CHECK(normal(0, 1).x == doctest::Approx(0.6f));
+    CHECK(normal(0, 1).z == doctest::Approx(0.8f));
+    // A zero normal, and a face given none, get the triangle's geometric normal.
+    CHECK(normal(0, 2) == Vec3{0, 0, 1});
+    for (int corner = 0; corner < 3; ++corner) CHECK(normal(1, corner) == Vec3{0, 0, 1});
+
+    const Scene flat = load_obj(dir.write("flat.obj",
+                                          "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\n"
+                                          "f 1 2 3\n"));
+    CHECK_FALSE(flat.has_vertex_normals());  // a `vn` no face uses changes nothing
+}
+
 TEST_CASE("materials come from the MTL file, every field") {
     TempDir dir;
     dir.write("m.mtl",
@@ -221,6 +248,10 @@ TEST_CASE("bad input fails with the file, the line and the problem") {
          "4: face normal index 1 is out of range: the file has 0 normals"},
         {"negative normal index", tri + "vn 0 0 1\nf 1//-2 2//-1 3//-1\n",
          "5: face normal index -2 reaches before the first normal"},
+        {"a NaN normal would shade NaN", tri + "vn 0 nan 1\nf 1//1 2//1 3//1\n",
+         "4: normal component 'nan' is not a finite number"},
+        {"a normal of two numbers", tri + "vn 0 1\nf 1//1 2//1 3//1\n",
+         "4: normal has 2 numbers; expected 'vn x y z'"},
         {"two-vertex face", tri + "f 1 2\n", "4: face has 2 vertices; a face needs at least 3"},
         {"malformed face vertex", tri + "f 1/ 2 3\n", "4: face vertex '1/' is malformed"},
         {"garbage index", tri + "f 1 2 three\n", "4: face vertex index 'three'"},

@@ -14,9 +14,11 @@
 #include "cl/kernels/packet_traverse.cl"
 #include "core/kd_render.h"
 
-/* The scene view the kernels read. */
+/* The scene view the kernels read; vertex_normals is read only when has_vertex_normals (a
+ * kernel argument cannot be a null buffer in OpenCL 1.2). */
 inline KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
                                  __global const float* triangles,
+                                 __global const float* vertex_normals, kd_u32 has_vertex_normals,
                                  __global const kd_u32* material_ids,
                                  __global const KdMaterial* materials,
                                  __global const KdLight* lights, __global const float* bounds) {
@@ -24,6 +26,7 @@ inline KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd
     scene.nodes = nodes;
     scene.leaf_indices = leaf_indices;
     scene.triangles = triangles;
+    scene.vertex_normals = has_vertex_normals ? vertex_normals : 0;
     scene.material_ids = material_ids;
     scene.materials = materials;
     scene.lights = lights;
@@ -111,7 +114,9 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
                                       __global const float* triangles, __global const float* bounds,
                                       const KdView view, const kd_u32 first_row, const kd_u32 rows,
                                       __global const KdLight* lights, __global const KdHit* traced,
-                                      __global kd_u32* occluded) {
+                                      __global kd_u32* occluded,
+                                      __global const float* vertex_normals,
+                                      const kd_u32 has_vertex_normals) {
     const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE;
     const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE;
     const kd_u32 r = (kd_u32)get_global_id(2);
@@ -119,10 +124,11 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
     /* With spp > 1, ray spp is the AOV's centre ray, which nothing shades. */
     if (view.spp > 1u && r == view.spp) return;
     const KdView v = view;
-    const KdSceneView scene = kd_scene_view(nodes, leaf_indices, triangles, 0, 0, lights, bounds);
-    /* Per lane (pixel (x0 + i % 4, row0 + i / 4)): its hit's point and normal, as kd_trace_sample
-     * computes them. */
-    kd_f32 p[KDRAY_PACKET_SIZE][3], n[KDRAY_PACKET_SIZE][3];
+    const KdSceneView scene = kd_scene_view(nodes, leaf_indices, triangles, vertex_normals,
+                                            has_vertex_normals, 0, 0, lights, bounds);
+    /* Per lane (pixel (x0 + i % 4, row0 + i / 4)): its hit's point and geometric and shading
+     * normals, as kd_trace_sample computes them. */
+    kd_f32 p[KDRAY_PACKET_SIZE][3], ng[KDRAY_PACKET_SIZE][3], ns[KDRAY_PACKET_SIZE][3];
     int inside[KDRAY_PACKET_SIZE], has_hit[KDRAY_PACKET_SIZE];
     kd_u32 blocked[KDRAY_PACKET_SIZE];
     size_t at[KDRAY_PACKET_SIZE];
@@ -138,7 +144,8 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
         if (hit.prim == KDRAY_NO_HIT) continue;
         const KdRay primary = kd_primary_ray(&v, xi, first_row + ri, r);
         kd_facing_normal(triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE, primary.dir,
-                         n[i]);
+                         ng[i]);
+        kd_shading_normal(&scene, hit, ng[i], ns[i]);
         kd_hit_point(&primary, hit.t, p[i]);
         has_hit[i] = 1;
     }
@@ -156,8 +163,8 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
             if (!has_hit[i]) continue;
             kd_f32 to_light[3], irradiance[3], distance;
             kd_light_at(&scene, &v, light_count, light, p[i], to_light, irradiance, &distance);
-            if (kd_dot3(n[i], to_light) <= 0.0f) continue;
-            const KdRay shadow = kd_shadow_ray(&v, p[i], n[i], to_light, distance);
+            if (kd_dot3(ns[i], to_light) <= 0.0f) continue;
+            const KdRay shadow = kd_shadow_ray(&v, p[i], ng[i], to_light, distance);
             for (int a = 0; a < 3; ++a) {
                 org[a][i] = shadow.org[a];
                 dir[a][i] = shadow.dir[a];
@@ -196,13 +203,15 @@ KDRAY_HOT_INLINE void kd_pixel_work_item(
     __global const float* bounds, const KdView* view, const kd_u32 first_row, const kd_u32 rows,
     __global float* rgb, __global KdHit* hits, __global float* normals,
     __global KdRayCounts* ray_counts, __global const KdHit* traced, __global const kd_u32* occluded,
-    const kd_u32 outputs, const int direct_only) {
+    const kd_u32 outputs, __global const float* vertex_normals, const kd_u32 has_vertex_normals,
+    const int direct_only) {
     const kd_u32 x = (kd_u32)get_global_id(0);
     const kd_u32 row = (kd_u32)get_global_id(1);
     if (x >= view->width || row >= rows) return;
     const kd_u32 y = first_row + row;
     const KdSceneView scene =
-        kd_scene_view(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds);
+        kd_scene_view(nodes, leaf_indices, triangles, vertex_normals, has_vertex_normals,
+                      material_ids, materials, lights, bounds);
     const size_t in_launch = (size_t)row * view->width + x;
     __global const kd_u32* blocked =
         (outputs & KDRAY_RENDER_TRACED_SHADOWS) ? occluded + in_launch : 0;
@@ -237,11 +246,13 @@ __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u
                                const kd_u32 first_row, const kd_u32 rows, __global float* rgb,
                                __global KdHit* hits, __global float* normals,
                                __global KdRayCounts* ray_counts, __global const KdHit* traced,
-                               __global const kd_u32* occluded, const kd_u32 outputs) {
+                               __global const kd_u32* occluded, const kd_u32 outputs,
+                               __global const float* vertex_normals,
+                               const kd_u32 has_vertex_normals) {
     const KdView v = view;
     kd_pixel_work_item(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds, &v,
                        first_row, rows, rgb, hits, normals, ray_counts, traced, occluded, outputs,
-                       0);
+                       vertex_normals, has_vertex_normals, 0);
 }
 
 /* kd_render_pixels for spp 1 with the primary hits traced, in a kernel without reflection and
@@ -253,9 +264,9 @@ __kernel void kd_shade_traced_pixels(
     __global const float* bounds, const KdView view, const kd_u32 first_row, const kd_u32 rows,
     __global float* rgb, __global KdHit* hits, __global float* normals,
     __global KdRayCounts* ray_counts, __global const KdHit* traced, __global const kd_u32* occluded,
-    const kd_u32 outputs) {
+    const kd_u32 outputs, __global const float* vertex_normals, const kd_u32 has_vertex_normals) {
     const KdView v = view;
     kd_pixel_work_item(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds, &v,
                        first_row, rows, rgb, hits, normals, ray_counts, traced, occluded, outputs,
-                       1);
+                       vertex_normals, has_vertex_normals, 1);
 }

@@ -60,6 +60,16 @@ void check_scene(const kdray::Scene& scene, const kdray::ObjPrescan& prescan) {
         if (id >= scene.materials.size()) bug("material id out of range");
     for (float x : scene.triangles)
         if (!std::isfinite(x)) bug("non-finite coordinate in a loaded scene");
+    if (scene.has_vertex_normals()) {
+        if (scene.vertex_normals.size() != n * KDRAY_FLOATS_PER_TRIANGLE) bug("partial normals");
+        for (std::size_t c = 0; c < 3 * n; ++c) {
+            const float* v = &scene.vertex_normals[3 * c];
+            const float length2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            // Unit length, or zero at a zero-area triangle's corners.
+            if (!(std::fabs(length2 - 1.0f) < 1e-5f || length2 == 0.0f))
+                bug("a vertex normal that is not unit length");
+        }
+    }
     // Every triangle comes from a face the pre-scan saw.
     if (prescan.faces == 0) bug("triangles without a face in the pre-scan");
 }

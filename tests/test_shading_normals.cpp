@@ -1,0 +1,182 @@
+// test_shading_normals.cpp — smooth shading from the OBJ's vertex normals: the shared shading
+// functions on hand-made cases, and whole frames of one triangle under a directional light against
+// Lambert's law in closed form, by the reference renderer and by the OpenCL renderer with and
+// without packets.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "cl/opencl_renderer.h"
+#include "core/kd_render.h"
+#include "core/reference_builder.h"
+#include "core/reference_tracer.h"
+#include "core/render_file.h"
+#include "core/render_setup.h"
+#include "core/scene.h"
+#include "tests/test_opencl_fixture.h"
+
+using namespace kdray;
+
+namespace {
+
+Vec3 unit(Vec3 v) {
+    return v / length(v);
+}
+
+void put(std::vector<float>& out, Vec3 v) {
+    out.insert(out.end(), {v.x, v.y, v.z});
+}
+
+/// A scene view holding nothing but vertex normals (all kd_shading_normal reads).
+KdSceneView normals_view(const std::vector<float>& normals) {
+    KdSceneView view{};
+    view.vertex_normals = normals.data();
+    return view;
+}
+
+/// One triangle in z = 0, wound counter-clockwise seen from +z, covering the camera's view of
+/// [-1.2, 1.2]^2 except a corner; its corners' normals lean apart, the second one so far that a
+/// region near it faces away from the light of lit_triangle_settings.
+Scene smooth_triangle() {
+    Scene scene = make_scene({-1.5f, -1.5f, 0, 3.5f, -1.5f, 0, -1.5f, 3.5f, 0});
+    put(scene.vertex_normals, {0, 0, 1});
+    put(scene.vertex_normals, unit({-4, 0, 1}));
+    put(scene.vertex_normals, unit({0, 1, 1}));
+    return scene;
+}
+
+const Vec3 kToLight = unit({0.3f, 0.2f, 1.0f});
+
+RenderSettings lit_triangle_settings() {
+    RenderSettings s;
+    s.width = 24;
+    s.height = 24;
+    s.camera_keys[0].camera = Camera{{0, 0, 4}, {0, 0, 0}, {0, 1, 0}, 34.0f};
+    s.camera_given = true;
+    s.lights.push_back(Light{Light::Type::directional, {}, -kToLight, {2, 2, 2}});
+    return s;
+}
+
+/// Lambert's law in double at each pixel's hit: Kd / pi * E * max(0, n . l), with n the corners'
+/// normals interpolated at the hit's barycentrics (u, v: the second and third corners') and
+/// normalised; the background where the ray missed. Returns the largest difference from the
+/// frame's image, after checking that most rays hit.
+double largest_lambert_error(const Scene& scene, const FrameResult& frame) {
+    const Vec3 kd = scene.materials[0].diffuse, background = RenderSettings{}.background;
+    double worst = 0;
+    std::size_t hits = 0;
+    for (std::size_t i = 0; i < frame.hits.hits.size(); ++i) {
+        const KdHit& hit = frame.hits.hits[i];
+        double expected[3] = {background.x, background.y, background.z};
+        if (hit.prim != KDRAY_NO_HIT) {
+            ++hits;
+            const double u = hit.u, v = hit.v, w = 1.0 - u - v;
+            double n[3], length2 = 0;
+            for (int a = 0; a < 3; ++a) {
+                n[a] = w * scene.vertex_normals[a] + u * scene.vertex_normals[3 + a] +
+                       v * scene.vertex_normals[6 + a];
+                length2 += n[a] * n[a];
+            }
+            const double cos_l =
+                (n[0] * kToLight.x + n[1] * kToLight.y + n[2] * kToLight.z) / std::sqrt(length2);
+            const double shade = 2.0 * std::max(0.0, cos_l) / M_PI;
+            expected[0] = kd.x * shade, expected[1] = kd.y * shade, expected[2] = kd.z * shade;
+        }
+        for (int c = 0; c < 3; ++c)
+            worst = std::max(worst, std::fabs(frame.image.rgb[3 * i + c] - expected[c]));
+    }
+    CHECK(hits > frame.hits.hits.size() / 2);
+    return worst;
+}
+
+}  // namespace
+
+TEST_CASE("shading normal: interpolated, unit length, on the geometric normal's side") {
+    const float ng[3] = {0, 0, 1};
+    float ns[3];
+    SUBCASE("the corners' normals weighted by the barycentrics") {
+        std::vector<float> normals;
+        put(normals, {0, 0, 1});
+        put(normals, {1, 0, 0});
+        put(normals, {0, 1, 0});
+        const KdSceneView view = normals_view(normals);
+        kd_shading_normal(&view, KdHit{1.0f, 0, 0.5f, 0.0f}, ng, ns);
+        CHECK(ns[0] == doctest::Approx(std::sqrt(0.5)));
+        CHECK(ns[1] == 0.0f);
+        CHECK(ns[2] == doctest::Approx(std::sqrt(0.5)));
+    }
+    SUBCASE("normals against the winding are turned to the side the ray sees") {
+        std::vector<float> normals;
+        for (int k = 0; k < 3; ++k) put(normals, unit({0.2f, 0, -1}));
+        const KdSceneView view = normals_view(normals);
+        kd_shading_normal(&view, KdHit{1.0f, 0, 0.2f, 0.3f}, ng, ns);
+        CHECK(ns[0] == doctest::Approx(-unit({0.2f, 0, -1}).x));
+        CHECK(ns[2] == doctest::Approx(-unit({0.2f, 0, -1}).z));
+    }
+    SUBCASE("normals that cancel, or none at all, leave the geometric normal") {
+        std::vector<float> normals;
+        put(normals, {0, 1, 0});
+        put(normals, {0, -1, 0});
+        put(normals, {0, 0, 1});
+        KdSceneView view = normals_view(normals);
+        kd_shading_normal(&view, KdHit{1.0f, 0, 0.5f, 0.0f}, ng, ns);
+        CHECK(ns[0] == 0.0f);
+        CHECK(ns[1] == 0.0f);
+        CHECK(ns[2] == 1.0f);
+        view.vertex_normals = nullptr;
+        kd_shading_normal(&view, KdHit{1.0f, 0, 0.2f, 0.2f}, ng, ns);
+        CHECK(ns[2] == 1.0f);
+    }
+}
+
+TEST_CASE("shading normal bends secondary rays only to the right side of the surface") {
+    const float ng[3] = {0, 0, 1};
+    const Vec3 d = unit({0.98f, 0, -0.196f});  // a grazing ray onto z = 0
+    const float dir[3] = {d.x, d.y, d.z};
+    const float mild[3] = {-0.6f, 0, 0.8f};
+    // The mirror ray about this normal would go into the surface: z = -0.003.
+    const float steep[3] = {0.1f, 0, std::sqrt(1.0f - 0.01f)};
+    // Facing away from the ray: no incidence at all.
+    const float away[3] = {0.6f, 0, 0.8f};
+    CHECK(kd_shading_normal_bends(dir, ng, ng, 0.0f));
+    CHECK(kd_shading_normal_bends(dir, ng, ng, 1.0f / 1.5f));
+    CHECK(kd_shading_normal_bends(dir, ng, mild, 0.0f));
+    CHECK_FALSE(kd_shading_normal_bends(dir, ng, steep, 0.0f));
+    CHECK_FALSE(kd_shading_normal_bends(dir, ng, away, 0.0f));
+    // Leaving glass (eta 1.5) near total internal reflection about a tilted normal: the mirror
+    // ray is fine (z = 0.91), the refracted ray would come back out on the ray's side (z = 0.15).
+    const Vec3 inside = unit({1.6f, 0, -1});
+    const float exit_dir[3] = {inside.x, inside.y, inside.z};
+    const Vec3 tilt = unit({-0.3f, 0, 1});
+    const float tilted[3] = {tilt.x, tilt.y, tilt.z};
+    CHECK(kd_shading_normal_bends(exit_dir, ng, tilted, 0.0f));
+    CHECK_FALSE(kd_shading_normal_bends(exit_dir, ng, tilted, 1.5f));
+}
+
+TEST_CASE("smooth shading follows Lambert's law at the interpolated normal") {
+    const Scene scene = smooth_triangle();
+    const KdTree tree = build_reference(scene);
+    const RenderSettings settings = lit_triangle_settings();
+    RenderInputs inputs = prepare_render(scene, settings, settings.camera_at(0), 0);
+    REQUIRE(inputs.effects.shadows);
+
+    SUBCASE("the reference renderer") {
+        CHECK(largest_lambert_error(scene, render_reference(tree, scene, inputs, 2)) < 1e-5);
+    }
+    SUBCASE("the OpenCL renderer, with and without packets") {
+        for (auto packets : {RenderInputs::Packets::On, RenderInputs::Packets::Off}) {
+            inputs.packets = packets;
+            const FrameResult frame =
+                render_opencl(test::opencl_test_device(), tree, scene, inputs);
+            CHECK(largest_lambert_error(scene, frame) < 1e-5);
+        }
+    }
+
+    SUBCASE("the check tells smooth from flat shading") {
+        Scene flat = scene;
+        flat.vertex_normals.clear();
+        const FrameResult frame = render_reference(tree, flat, inputs, 2);
+        CHECK(largest_lambert_error(scene, frame) > 0.1);
+    }
+}
