@@ -4,7 +4,8 @@
   testdata/cornell/room.obj, room.mtl, render.json
       A Cornell-style room: floor, ceiling, back wall, red left and green right walls (subdivided
       quads), an emissive ceiling light quad (Ke), a matte box, a mirror sphere (illum 3, Ks 1) and
-      a glass sphere (illum 7, Ni 1.5, Tf), lit by a point light; a 640x480 camera looks in.
+      a glass sphere (illum 7, Ni 1.5, Tf), lit by a point light; a 640x480 camera looks in. The
+      spheres carry vertex normals (`vn`) and shade smooth; the flat faces have none.
   testdata/anim/frame_000.obj ... frame_011.obj, scene.mtl, render.json
       12 frames of a sphere bouncing and a cube spinning over a ground plane, with a keyframed
       camera (keys at frames 0 and 11) that orbits part way round them.
@@ -31,11 +32,18 @@ class Obj:
     def __init__(self, header, mtllib):
         self.lines = ["# " + line for line in header] + ["mtllib " + mtllib]
         self.count = 0
+        self.normals = 0
 
     def vertex(self, p):
         self.lines.append("v %s %s %s" % (num(p[0]), num(p[1]), num(p[2])))
         self.count += 1
         return self.count
+
+    def normal(self, n):
+        """A `vn` line; returns its number (numbered from 1 across the file, like vertices)."""
+        self.lines.append("vn %s %s %s" % (num(n[0]), num(n[1]), num(n[2])))
+        self.normals += 1
+        return self.normals
 
     def group(self, name, material):
         self.lines += ["o " + name, "usemtl " + material]
@@ -52,19 +60,24 @@ class Obj:
                 self.face(ids[j][i], ids[j][i + 1], ids[j + 1][i + 1], ids[j + 1][i])
 
     def sphere(self, centre, radius, segments, rings):
-        """A UV sphere of triangles: fans at the poles, two triangles per quad between."""
-        top = self.vertex([centre[0], centre[1] + radius, centre[2]])
+        """A UV sphere of triangles: fans at the poles, two triangles per quad between; each
+        vertex has the sphere's normal there (`v//vn`), so that it shades smooth."""
+
+        def corner(direction):
+            v = self.vertex([centre[k] + radius * direction[k] for k in range(3)])
+            return "%d//%d" % (v, self.normal(direction))
+
+        top = corner([0, 1, 0])
         ring_ids = []
         for r in range(1, rings):
             theta = math.pi * r / rings
             ids = []
             for s in range(segments):
                 phi = 2 * math.pi * s / segments
-                ids.append(self.vertex([centre[0] + radius * math.sin(theta) * math.cos(phi),
-                                        centre[1] + radius * math.cos(theta),
-                                        centre[2] + radius * math.sin(theta) * math.sin(phi)]))
+                ids.append(corner([math.sin(theta) * math.cos(phi), math.cos(theta),
+                                   math.sin(theta) * math.sin(phi)]))
             ring_ids.append(ids)
-        bottom = self.vertex([centre[0], centre[1] - radius, centre[2]])
+        bottom = corner([0, -1, 0])
         for s in range(segments):
             t = (s + 1) % segments
             self.face(top, ring_ids[0][t], ring_ids[0][s])
@@ -246,7 +259,7 @@ regenerate them, run from the repository root:
 
 - `cornell/` — `room.obj` + `room.mtl` + `render.json`: a Cornell-style room (red and green side
   walls, an emissive ceiling light quad, a matte box, a mirror sphere with `illum 3`, a glass sphere
-  with `illum 7` and `Ni 1.5`), a point light, a 640x480 camera.
+  with `illum 7` and `Ni 1.5`; the spheres have vertex normals), a point light, a 640x480 camera.
 - `anim/` — `frame_000.obj` ... `frame_011.obj` + `scene.mtl` + `render.json`: a sphere bouncing
   and a cube spinning over a ground plane; the camera is keyframed at frames 0 and 11.
 """
