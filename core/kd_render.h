@@ -165,6 +165,18 @@ KDRAY_INLINE kd_f32 kd_fresnel(kd_f32 cos_i, kd_f32 eta, kd_f32* cos_t) {
     return 0.5f * (r_s * r_s + r_p * r_p);
 }
 
+/* The mirror direction of dir about the unit normal n, cos_i = -dir . n. */
+KDRAY_INLINE void kd_reflect(const kd_f32* dir, const kd_f32* n, kd_f32 cos_i, kd_f32* out) {
+    for (int a = 0; a < 3; ++a) out[a] = dir[a] + 2.0f * cos_i * n[a];
+}
+
+/* The refracted direction of dir through the unit normal n, not yet unit length, for eta and
+ * the cosines cos_i and cos_t of kd_fresnel. */
+KDRAY_INLINE void kd_refract(const kd_f32* dir, const kd_f32* n, kd_f32 eta, kd_f32 cos_i,
+                             kd_f32 cos_t, kd_f32* out) {
+    for (int a = 0; a < 3; ++a) out[a] = eta * dir[a] + (eta * cos_i - cos_t) * n[a];
+}
+
 /* Whether the shading normal ns may bend a hit's secondary rays (dir: the incoming ray; ng: the
  * geometric normal, facing it; eta: n_incident / n_transmitted at a dielectric, 0 where nothing
  * refracts): not when a ray it bends would leave on the wrong side of the surface, the mirror
@@ -174,15 +186,24 @@ KDRAY_HOT_INLINE int kd_shading_normal_bends(const kd_f32* dir, const kd_f32* ng
                                              kd_f32 eta) {
     const kd_f32 cos_i = -kd_dot3(dir, ns);
     if (!(cos_i > 0.0f)) return 0;
-    const kd_f32 dir_ng = kd_dot3(dir, ng), ns_ng = kd_dot3(ns, ng);
-    if (!(dir_ng + 2.0f * cos_i * ns_ng > 0.0f)) return 0;
-    if (eta > 0.0f) {
-        const kd_f32 sin2_t = eta * eta * (1.0f - cos_i * cos_i);
-        if (sin2_t < 1.0f &&
-            !(eta * dir_ng + (eta * cos_i - KDRAY_SQRT(1.0f - sin2_t)) * ns_ng < 0.0f))
-            return 0;
+    kd_f32 bent[3], cos_t;
+    kd_reflect(dir, ns, cos_i, bent);
+    if (!(kd_dot3(bent, ng) > 0.0f)) return 0;
+    if (eta > 0.0f && kd_fresnel(cos_i, eta, &cos_t) < 1.0f) {
+        kd_refract(dir, ns, eta, cos_i, cos_t, bent);
+        if (!(kd_dot3(bent, ng) < 0.0f)) return 0;
     }
     return 1;
+}
+
+/* The cosine by which a light in direction to_light shines on a surface (geometric normal ng,
+ * shading normal ns): by ns, and 0 unless the light is in front of both. A light behind the
+ * triangle's own plane lights nothing, even where the interpolated normal faces it: its shadow
+ * ray would only cross the triangle again (or slip past the mesh near an edge). */
+KDRAY_HOT_INLINE kd_f32 kd_light_cosine(const kd_f32* ng, const kd_f32* ns,
+                                        const kd_f32* to_light) {
+    const kd_f32 cos_l = kd_dot3(ns, to_light);
+    return kd_dot3(ng, to_light) > 0.0f && cos_l > 0.0f ? cos_l : 0.0f;
 }
 
 /* A ray waiting to be traced, with the share of the pixel it carries. */
@@ -277,7 +298,7 @@ KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* vi
     for (kd_u32 i = 0; i < lights; ++i) {
         kd_f32 to_light[3], irradiance[3], distance;
         kd_light_at(scene, view, light_count, i, p, to_light, irradiance, &distance);
-        const kd_f32 cos_l = kd_dot3(ns, to_light);
+        const kd_f32 cos_l = kd_light_cosine(ng, ns, to_light);
         if (cos_l <= 0.0f) continue;
         if (light_count != 0u) {
             rays->shadow += 1u;
@@ -407,7 +428,7 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
         const kd_f32* n = kd_shading_normal_bends(r.ray.dir, ng, ns, eta) ? ns : ng;
         const kd_f32 cos_i = -kd_dot3(r.ray.dir, n);
         kd_f32 reflect_dir[3], reflect_w[3] = {0.0f, 0.0f, 0.0f};
-        for (int a = 0; a < 3; ++a) reflect_dir[a] = r.ray.dir[a] + 2.0f * cos_i * n[a];
+        kd_reflect(r.ray.dir, n, cos_i, reflect_dir);
         if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFLECTION) && (m->flags & KDRAY_MATERIAL_MIRROR))
             for (int c = 0; c < 3; ++c) reflect_w[c] = r.weight[c] * surface * m->specular[c];
         if (dielectric) {
@@ -422,10 +443,8 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
             if (fresnel < 1.0f && KDRAY_FMAX(refract_w[0], KDRAY_FMAX(refract_w[1], refract_w[2])) >
                                       KDRAY_MIN_PATH_WEIGHT) {
                 kd_f32 org[3], dir[3];
-                for (int a = 0; a < 3; ++a) {
-                    dir[a] = eta * r.ray.dir[a] + (eta * cos_i - cos_t) * n[a];
-                    org[a] = p[a] - ng[a] * view->ray_epsilon;
-                }
+                kd_refract(r.ray.dir, n, eta, cos_i, cos_t, dir);
+                for (int a = 0; a < 3; ++a) org[a] = p[a] - ng[a] * view->ray_epsilon;
                 kd_normalize3(dir);
                 stack[pending++] = kd_pending(org, dir, refract_w, r.depth + 1u, 2u);
             }

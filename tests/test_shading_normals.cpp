@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "cl/opencl_renderer.h"
+#include "core/camera.h"
 #include "core/kd_render.h"
 #include "core/reference_builder.h"
 #include "core/reference_tracer.h"
@@ -60,7 +61,8 @@ RenderSettings lit_triangle_settings() {
 
 /// Lambert's law in double at each pixel's hit: Kd / pi * E * max(0, n . l), with n the corners'
 /// normals interpolated at the hit's barycentrics (u, v: the second and third corners') and
-/// normalised; the background where the ray missed. Returns the largest difference from the
+/// normalised (the light is in front of the triangle's plane everywhere); the background where
+/// the ray missed. Returns the largest difference from the
 /// frame's image, after checking that most rays hit.
 double largest_lambert_error(const Scene& scene, const FrameResult& frame) {
     const Vec3 kd = scene.materials[0].diffuse, background = RenderSettings{}.background;
@@ -178,5 +180,80 @@ TEST_CASE("smooth shading follows Lambert's law at the interpolated normal") {
         flat.vertex_normals.clear();
         const FrameResult frame = render_reference(tree, flat, inputs, 2);
         CHECK(largest_lambert_error(scene, frame) > 0.1);
+    }
+}
+
+TEST_CASE("a smooth mirror reflects about the interpolated normal") {
+    // A mirror square in z = 0 whose normals all lean toward +x, seen from above: its mirror
+    // rays lean toward +x too and find an emitting wall at x = 2 that the camera cannot see;
+    // about the flat normal they would go straight up, into the background.
+    Scene scene = make_scene({-1, -1,   0, 1, -1,   0, 1, 1, 0, -1, -1,   0, 1, 1, 0, -1, 1, 0, 2,
+                              -3, 0.5f, 2, 3, 0.5f, 2, 3, 5, 2, -3, 0.5f, 2, 3, 5, 2, -3, 5});
+    const Vec3 lean = unit({0.3f, 0, 1});
+    for (int c = 0; c < 6; ++c) put(scene.vertex_normals, lean);
+    for (int c = 0; c < 6; ++c) put(scene.vertex_normals, {-1, 0, 0});
+    const Vec3 glow{1.0f, 0.5f, 0.25f};
+    scene.materials = {
+        Material{.name = "mirror", .diffuse = {0, 0, 0}, .specular = {1, 1, 1}, .illum = 3},
+        Material{.name = "wall", .diffuse = {0, 0, 0}, .emission = glow}};
+    scene.material_ids = {0, 0, 1, 1};
+    const KdTree tree = build_reference(scene);
+    RenderSettings settings;
+    settings.width = settings.height = 20;
+    const Camera camera{{0, 0, 3}, {0, 0, 0}, {0, 1, 0}, 30.0f};
+    const RenderInputs inputs = prepare_render(scene, settings, camera, 0);
+    REQUIRE(inputs.effects.reflection);
+
+    // The expected colour of each pixel, in double: the wall's emission where the mirror ray
+    // about `lean` meets it, else the background; pixels whose rays pass within 1e-3 of an edge
+    // are left out.
+    auto check_frame = [&](const FrameResult& frame) {
+        const CameraRays rays(camera, settings.width, settings.height);
+        const Vec3 bg = settings.background;
+        int on_wall = 0, checked = 0;
+        double worst = 0;
+        for (int y = 0; y < settings.height; ++y)
+            for (int x = 0; x < settings.width; ++x) {
+                const KdRay ray = rays.ray(x + 0.5f, y + 0.5f);
+                const double o[3] = {ray.org[0], ray.org[1], ray.org[2]};
+                const double d[3] = {ray.dir[0], ray.dir[1], ray.dir[2]};
+                const double t = -o[2] / d[2], px = o[0] + t * d[0], py = o[1] + t * d[1];
+                if (std::fabs(std::fabs(px) - 1) < 1e-3 || std::fabs(std::fabs(py) - 1) < 1e-3)
+                    continue;
+                Vec3 expected = bg;
+                if (std::fabs(px) < 1 && std::fabs(py) < 1) {
+                    const double n[3] = {lean.x, lean.y, lean.z};
+                    const double dn = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+                    const double r[3] = {d[0] - 2 * dn * n[0], d[1] - 2 * dn * n[1],
+                                         d[2] - 2 * dn * n[2]};
+                    const double s = (2 - px) / r[0], qy = py + s * r[1], qz = s * r[2];
+                    if (std::fabs(std::fabs(qy) - 3) < 1e-3 || std::fabs(qz - 0.5) < 1e-3 ||
+                        std::fabs(qz - 5) < 1e-3)
+                        continue;
+                    if (r[0] > 0 && std::fabs(qy) < 3 && qz > 0.5 && qz < 5) {
+                        expected = glow;
+                        ++on_wall;
+                    }
+                }
+                const float* rgb = &frame.image.rgb[3 * (std::size_t(y) * settings.width + x)];
+                const float want[3] = {expected.x, expected.y, expected.z};
+                for (int c = 0; c < 3; ++c)
+                    worst = std::max(worst, double(std::fabs(rgb[c] - want[c])));
+                ++checked;
+            }
+        CHECK(checked > settings.width * settings.height * 3 / 4);
+        CHECK(on_wall > 50);
+        return worst;
+    };
+    SUBCASE("the reference renderer") {
+        CHECK(check_frame(render_reference(tree, scene, inputs, 2)) < 1e-5);
+    }
+    SUBCASE("the OpenCL renderer") {
+        CHECK(check_frame(render_opencl(test::opencl_test_device(), tree, scene, inputs)) < 1e-5);
+    }
+    SUBCASE("the check tells the leaning normals from the flat one") {
+        Scene flat = scene;
+        flat.vertex_normals.clear();
+        CHECK(check_frame(render_reference(tree, flat, inputs, 2)) > 0.5);
     }
 }

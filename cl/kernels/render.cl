@@ -163,7 +163,7 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
             if (!has_hit[i]) continue;
             kd_f32 to_light[3], irradiance[3], distance;
             kd_light_at(&scene, &v, light_count, light, p[i], to_light, irradiance, &distance);
-            if (kd_dot3(ns[i], to_light) <= 0.0f) continue;
+            if (kd_light_cosine(ng[i], ns[i], to_light) <= 0.0f) continue;
             const KdRay shadow = kd_shadow_ray(&v, p[i], ng[i], to_light, distance);
             for (int a = 0; a < 3; ++a) {
                 org[a][i] = shadow.org[a];
