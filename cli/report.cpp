@@ -11,6 +11,8 @@ nlohmann::json scene_json(const Scene& scene) {
     return {{"path", scene.path.string()},
             {"triangles", scene.triangle_count()},
             {"zero_area_triangles", scene.zero_area_triangles},
+            // Whether the frame shades smooth (the OBJ's vn) or flat.
+            {"vertex_normals", scene.has_vertex_normals()},
             {"materials", scene.materials.size()},
             {"warnings", scene.warnings}};
 }

@@ -78,6 +78,12 @@ TEST_CASE("kdray build --json reports the tree the reference builder makes in-pr
     TreeStats stats = compute_tree_stats(expected, scene.triangle_count(), expected.params.costs);
     CHECK(j["sah_cost"].get<double>() == doctest::Approx(stats.sah_cost).epsilon(1e-9));
     CHECK(j["scene"]["triangles"].get<std::size_t>() == 300);
+    CHECK(j["scene"]["vertex_normals"] == false);  // write_obj writes no vn
+    CommandResult smooth =
+        run_kdray({"build", (source_dir() / "testdata/cornell/room.obj").string(), "--builder",
+                   "reference", "--json"});
+    REQUIRE_MESSAGE(smooth.status == 0, smooth.err);
+    CHECK(nlohmann::json::parse(smooth.out)["scene"]["vertex_normals"] == true);
 
     // The saved tree is the same tree, and `kdray stats` reads it back.
     TreeFile file = read_tree_file(dir / "scene.kdt");
