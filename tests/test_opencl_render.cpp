@@ -227,6 +227,20 @@ void check_packets(const Scene& scene, const KdTree& tree, const RenderInputs& b
                       images[0].rgb.size() * sizeof(float)) == 0);
 }
 
+/// A unit normal of random direction at every corner of the scene's triangles.
+void add_random_vertex_normals(Scene& scene) {
+    std::uint32_t state = 12345;
+    auto next = [&] {
+        state = state * 1664525u + 1013904223u;
+        return float(state >> 8) / float(1u << 24) * 2.0f - 1.0f;
+    };
+    scene.vertex_normals.clear();
+    for (std::size_t c = 0; c < 3 * scene.triangle_count(); ++c) {
+        const Vec3 n = normalize(Vec3{next(), next(), next()} + Vec3{0, 0, 0.01f});
+        scene.vertex_normals.insert(scene.vertex_normals.end(), {n.x, n.y, n.z});
+    }
+}
+
 }  // namespace
 
 TEST_CASE("opencl render: packets of primary rays give the reference's hits bit for bit") {
@@ -246,34 +260,21 @@ TEST_CASE("opencl render: packets of primary rays give the reference's hits bit 
         settings.spp = 3;
         check_packets(scene, tree, prepare_render(scene, settings, skew_camera(scene), 7));
     }
-    SUBCASE("smooth shading: random corner normals under a point light") {
-        // Lights in front of the interpolated normal but behind the triangle, and the reverse:
-        // the packets must cast exactly the shadow rays the shading reads.
-        Scene scene = test::random_triangles(2000, 47);
-        std::uint32_t state = 12345;
-        auto next = [&] {
-            state = state * 1664525u + 1013904223u;
-            return float(state >> 8) / float(1u << 24) * 2.0f - 1.0f;
-        };
-        for (std::size_t c = 0; c < 3 * scene.triangle_count(); ++c) {
-            const Vec3 n = normalize(Vec3{next(), next(), next()} + Vec3{0, 0, 0.01f});
-            scene.vertex_normals.insert(scene.vertex_normals.end(), {n.x, n.y, n.z});
+    SUBCASE("a point light: shadow rays from the packets' hits, flat and smooth") {
+        Scene scene = test::random_triangles(2000, 43);
+        for (bool smooth : {false, true}) {
+            CAPTURE(smooth);
+            // Random corner normals: lights in front of the interpolated normal but behind the
+            // triangle, and the reverse; the packets must cast the shadow rays the shading reads.
+            if (smooth) add_random_vertex_normals(scene);
+            const KdTree tree = build_reference(scene);
+            RenderSettings settings = small_settings(23, 19);
+            const Aabb b = scene.bounds();
+            settings.lights.push_back(point_light(b.hi + (b.hi - b.lo) * 0.25f, {40, 40, 40}));
+            const RenderInputs inputs = prepare_render(scene, settings, skew_camera(scene), 0);
+            REQUIRE(inputs.effects.bits() == KDRAY_EFFECT_SHADOWS);
+            check_packets(scene, tree, inputs);
         }
-        const KdTree tree = build_reference(scene);
-        RenderSettings settings = small_settings(23, 19);
-        const Aabb b = scene.bounds();
-        settings.lights.push_back(point_light(b.hi + (b.hi - b.lo) * 0.25f, {40, 40, 40}));
-        check_packets(scene, tree, prepare_render(scene, settings, skew_camera(scene), 0));
-    }
-    SUBCASE("a point light: shadow rays from the packets' hits") {
-        const Scene scene = test::random_triangles(2000, 43);
-        const KdTree tree = build_reference(scene);
-        RenderSettings settings = small_settings(23, 19);
-        const Aabb b = scene.bounds();
-        settings.lights.push_back(point_light(b.hi + (b.hi - b.lo) * 0.25f, {40, 40, 40}));
-        const RenderInputs inputs = prepare_render(scene, settings, skew_camera(scene), 0);
-        REQUIRE(inputs.effects.bits() == KDRAY_EFFECT_SHADOWS);
-        check_packets(scene, tree, inputs);
     }
     SUBCASE("lights among the cubes: most shadow rays blocked, as packets of shadow rays") {
         // Point lights inside a lattice of cubes and a directional light from outside: the cubes
