@@ -425,7 +425,8 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
                                   e1[0] * e2[1] - e1[1] * e2[0]};
             eta = kd_dot3(wn, r.ray.dir) < 0.0f ? 1.0f / m->ior : m->ior;
         }
-        const kd_f32* n = kd_shading_normal_bends(r.ray.dir, ng, ns, eta) ? ns : ng;
+        const kd_f32* n =
+            scene->vertex_normals && kd_shading_normal_bends(r.ray.dir, ng, ns, eta) ? ns : ng;
         const kd_f32 cos_i = -kd_dot3(r.ray.dir, n);
         kd_f32 reflect_dir[3], reflect_w[3] = {0.0f, 0.0f, 0.0f};
         kd_reflect(r.ray.dir, n, cos_i, reflect_dir);
