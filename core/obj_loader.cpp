@@ -63,12 +63,8 @@ void set_vertex_normals(Scene& scene, const std::vector<int>& corner_normal,
         return true;
     };
     for (std::size_t t = 0; t < n; ++t) {
-        const float* p = &scene.triangles[t * KDRAY_FLOATS_PER_TRIANGLE];
-        double e1[3], e2[3];
-        for (int a = 0; a < 3; ++a)
-            e1[a] = double(p[3 + a]) - p[a], e2[a] = double(p[6 + a]) - p[a];
-        const double geometric[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                                     e1[0] * e2[1] - e1[1] * e2[0]};
+        double geometric[3];
+        triangle_cross_double(&scene.triangles[t * KDRAY_FLOATS_PER_TRIANGLE], geometric);
         for (int corner = 0; corner < 3; ++corner) {
             float* out = &scene.vertex_normals[t * KDRAY_FLOATS_PER_TRIANGLE + 3 * corner];
             const int index = corner_normal[3 * t + corner];

@@ -48,6 +48,17 @@ Aabb Scene::bounds() const {
     return b;
 }
 
+void triangle_cross_double(const float* v, double out[3]) {
+    double e1[3], e2[3];
+    for (int a = 0; a < 3; ++a) {
+        e1[a] = double(v[3 + a]) - double(v[a]);
+        e2[a] = double(v[6 + a]) - double(v[a]);
+    }
+    out[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    out[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    out[2] = e1[0] * e2[1] - e1[1] * e2[0];
+}
+
 void collapse_zero_area_triangles(Scene& scene) {
     scene.zero_area_triangles = 0;
     for (std::size_t t = 0; t < scene.triangle_count(); ++t) {
@@ -56,14 +67,9 @@ void collapse_zero_area_triangles(Scene& scene) {
             if (!std::isfinite(v[i]))
                 throw Error(scene.path.string() + ": triangle " + std::to_string(t) +
                             " has a non-finite coordinate");
-        double e1[3], e2[3];
-        for (int a = 0; a < 3; ++a) {
-            e1[a] = double(v[3 + a]) - double(v[a]);
-            e2[a] = double(v[6 + a]) - double(v[a]);
-        }
-        const double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2],
-                     nz = e1[0] * e2[1] - e1[1] * e2[0];
-        if (nx != 0.0 || ny != 0.0 || nz != 0.0) continue;
+        double n[3];
+        triangle_cross_double(v, n);
+        if (n[0] != 0.0 || n[1] != 0.0 || n[2] != 0.0) continue;
         ++scene.zero_area_triangles;
         for (int i = 3; i < KDRAY_FLOATS_PER_TRIANGLE; ++i) v[i] = v[i % 3];
     }

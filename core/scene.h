@@ -75,6 +75,10 @@ struct Scene {
     bool has_vertex_normals() const { return !vertex_normals.empty(); }
 };
 
+/// The cross product of a triangle's edges (v1 - v0) x (v2 - v0), in double, where the product of
+/// float differences is all but exact: zero exactly when the triangle has no area.
+void triangle_cross_double(const float* triangle, double out[3]);
+
 /// Counts the zero-area triangles into scene.zero_area_triangles and collapses each to its first
 /// corner. They keep their numbers but can never be hit: three distinct collinear corners would
 /// no longer be collinear after a ray-space transform rounds them. The area test is in double,

@@ -21,10 +21,6 @@ using namespace kdray;
 
 namespace {
 
-Vec3 unit(Vec3 v) {
-    return v / length(v);
-}
-
 void put(std::vector<float>& out, Vec3 v) {
     out.insert(out.end(), {v.x, v.y, v.z});
 }
@@ -42,12 +38,12 @@ KdSceneView normals_view(const std::vector<float>& normals) {
 Scene smooth_triangle() {
     Scene scene = make_scene({-1.5f, -1.5f, 0, 3.5f, -1.5f, 0, -1.5f, 3.5f, 0});
     put(scene.vertex_normals, {0, 0, 1});
-    put(scene.vertex_normals, unit({-4, 0, 1}));
-    put(scene.vertex_normals, unit({0, 1, 1}));
+    put(scene.vertex_normals, normalize(Vec3{-4, 0, 1}));
+    put(scene.vertex_normals, normalize(Vec3{0, 1, 1}));
     return scene;
 }
 
-const Vec3 kToLight = unit({0.3f, 0.2f, 1.0f});
+const Vec3 kToLight = normalize(Vec3{0.3f, 0.2f, 1.0f});
 
 RenderSettings lit_triangle_settings() {
     RenderSettings s;
@@ -110,11 +106,11 @@ TEST_CASE("shading normal: interpolated, unit length, on the geometric normal's 
     }
     SUBCASE("normals against the winding are turned to the side the ray sees") {
         std::vector<float> normals;
-        for (int k = 0; k < 3; ++k) put(normals, unit({0.2f, 0, -1}));
+        for (int k = 0; k < 3; ++k) put(normals, normalize(Vec3{0.2f, 0, -1}));
         const KdSceneView view = normals_view(normals);
         kd_shading_normal(&view, KdHit{1.0f, 0, 0.2f, 0.3f}, ng, ns);
-        CHECK(ns[0] == doctest::Approx(-unit({0.2f, 0, -1}).x));
-        CHECK(ns[2] == doctest::Approx(-unit({0.2f, 0, -1}).z));
+        CHECK(ns[0] == doctest::Approx(-normalize(Vec3{0.2f, 0, -1}).x));
+        CHECK(ns[2] == doctest::Approx(-normalize(Vec3{0.2f, 0, -1}).z));
     }
     SUBCASE("normals that cancel, or none at all, leave the geometric normal") {
         std::vector<float> normals;
@@ -134,7 +130,7 @@ TEST_CASE("shading normal: interpolated, unit length, on the geometric normal's 
 
 TEST_CASE("shading normal bends secondary rays only to the right side of the surface") {
     const float ng[3] = {0, 0, 1};
-    const Vec3 d = unit({0.98f, 0, -0.196f});  // a grazing ray onto z = 0
+    const Vec3 d = normalize(Vec3{0.98f, 0, -0.196f});  // a grazing ray onto z = 0
     const float dir[3] = {d.x, d.y, d.z};
     const float mild[3] = {-0.6f, 0, 0.8f};
     // The mirror ray about this normal would go into the surface: z = -0.003.
@@ -148,9 +144,9 @@ TEST_CASE("shading normal bends secondary rays only to the right side of the sur
     CHECK_FALSE(kd_shading_normal_bends(dir, ng, away, 0.0f));
     // Leaving glass (eta 1.5) near total internal reflection about a tilted normal: the mirror
     // ray is fine (z = 0.91), the refracted ray would come back out on the ray's side (z = 0.15).
-    const Vec3 inside = unit({1.6f, 0, -1});
+    const Vec3 inside = normalize(Vec3{1.6f, 0, -1});
     const float exit_dir[3] = {inside.x, inside.y, inside.z};
-    const Vec3 tilt = unit({-0.3f, 0, 1});
+    const Vec3 tilt = normalize(Vec3{-0.3f, 0, 1});
     const float tilted[3] = {tilt.x, tilt.y, tilt.z};
     CHECK(kd_shading_normal_bends(exit_dir, ng, tilted, 0.0f));
     CHECK_FALSE(kd_shading_normal_bends(exit_dir, ng, tilted, 1.5f));
@@ -189,7 +185,7 @@ TEST_CASE("a smooth mirror reflects about the interpolated normal") {
     // about the flat normal they would go straight up, into the background.
     Scene scene = make_scene({-1, -1,   0, 1, -1,   0, 1, 1, 0, -1, -1,   0, 1, 1, 0, -1, 1, 0, 2,
                               -3, 0.5f, 2, 3, 0.5f, 2, 3, 5, 2, -3, 0.5f, 2, 3, 5, 2, -3, 5});
-    const Vec3 lean = unit({0.3f, 0, 1});
+    const Vec3 lean = normalize(Vec3{0.3f, 0, 1});
     for (int c = 0; c < 6; ++c) put(scene.vertex_normals, lean);
     for (int c = 0; c < 6; ++c) put(scene.vertex_normals, {-1, 0, 0});
     const Vec3 glow{1.0f, 0.5f, 0.25f};
