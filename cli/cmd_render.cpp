@@ -12,7 +12,7 @@
 #include <iostream>
 #include <utility>
 
-#include "cl/opencl_renderer.h"
+#include "cl/render/opencl_renderer.h"
 #include "cli/commands.h"
 #include "cli/device_session.h"
 #include "cli/frame_selection.h"
@@ -26,6 +26,7 @@
 #include "core/render_file.h"
 #include "core/render_setup.h"
 #include "core/scene.h"
+#include "core/version.h"
 
 namespace kdray::cli {
 namespace {
@@ -193,7 +194,7 @@ int run_render(const RenderCommand& command) {
     // 2 cores), so it overlaps writing the files instead.
     const bool compute_on_host = command.builder.builder == "reference" ||
                                  command.tracer == "reference" ||
-                                 session.device().info().type == "CPU";
+                                 session.device().is_cpu();
     auto load_async = [&](std::size_t frame) {
         return std::async(std::launch::async, [path = inputs[frame]] {
             auto start = Clock::now();
@@ -233,7 +234,7 @@ int run_render(const RenderCommand& command) {
     }
 
     nlohmann::json stats = {
-        {"kdray_version", "0.1.0"},
+        {"kdray_version", kVersion},
         {"builder", builder.description()},
         {"tracer", command.tracer},
         {"render_file", command.render_file},

@@ -5,7 +5,7 @@
 #include <memory>
 #include <string>
 
-#include "cl/device.h"
+#include "cl/runtime/device.h"
 
 namespace kdray::cli {
 

@@ -1,6 +1,6 @@
 #include "cli/devices.h"
 
-#include "cl/device.h"
+#include "cl/runtime/device.h"
 #include "core/error.h"
 
 namespace kdray::cli {

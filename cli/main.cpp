@@ -10,9 +10,11 @@
 #include <exception>
 #include <iostream>
 #include <new>
+#include <string>
 
 #include "cli/commands.h"
 #include "core/error.h"
+#include "core/version.h"
 
 namespace {
 
@@ -75,7 +77,7 @@ int main(int argc, char** argv) {
     keep_freed_memory_for_reuse();
     CLI::App app{"kdray: kd-trees built on an OpenCL device (Zhou et al. 2008), ray traced"};
     app.require_subcommand(1);
-    app.set_version_flag("--version", "kdray 0.1.0");
+    app.set_version_flag("--version", std::string("kdray ") + kdray::kVersion);
 
     BuildCommand build;
     auto* build_app = app.add_subcommand("build", "Build a kd-tree and print its statistics");

@@ -2,7 +2,7 @@
 
 #include <chrono>
 
-#include "cl/opencl_builder.h"
+#include "cl/build/opencl_builder.h"
 #include "core/reference_builder.h"
 
 namespace kdray::cli {

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "cl/opencl_builder.h"
+#include "cl/build/opencl_builder.h"
 #include "cli/commands.h"
 #include "cli/device_session.h"
 #include "core/kd_tree.h"

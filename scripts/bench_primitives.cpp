@@ -1,4 +1,4 @@
-// bench_primitives.cpp — kdray's data-parallel primitives (cl/primitives.h) against Boost.Compute's
+// bench_primitives.cpp — kdray's data-parallel primitives (cl/runtime/primitives.h) against Boost.Compute's
 // on the same ClDevice: exclusive scan (ClPrimitives::exclusive_scan vs
 // boost::compute::exclusive_scan) and stream compaction (ClPrimitives::compact vs
 // boost::compute::copy_if, and vs Boost's own scan + scatter_if over the same flags array that
@@ -36,8 +36,8 @@
 #include <boost/compute/function.hpp>
 #include <boost/compute/iterator/buffer_iterator.hpp>
 
-#include "cl/device.h"
-#include "cl/primitives.h"
+#include "cl/runtime/device.h"
+#include "cl/runtime/primitives.h"
 
 namespace {
 

@@ -151,7 +151,7 @@ L.append("## Varying sizes (as in the kd-tree build)")
 L.append("")
 L.append("The builder's arrays change length at every level. Total milliseconds for one call at "
          "each of 40 sizes not yet seen in the process (n = 100,003 + 1,009·i), then for the same "
-         "40 sizes again. kdray launches every kernel with one work-group size (`cl/launch.h`); "
+         "40 sizes again. kdray launches every kernel with one work-group size (`cl/runtime/launch.h`); "
          "Boost.Compute leaves the local size to the runtime, and PoCL derives it from the global "
          "size, so a new n can mean a new work-group variant: compiled (empty PoCL cache: the "
          "first full-run process, whose cache has never seen these sizes) or loaded from PoCL's "

@@ -7,8 +7,8 @@
 #include <cstdlib>
 #include <string>
 
-#include "cl/device.h"
-#include "cl/program_cache.h"
+#include "cl/runtime/device.h"
+#include "cl/runtime/program_cache.h"
 #include "core/error.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "cl/opencl_renderer.h"
+#include "cl/render/opencl_renderer.h"
 #include "core/kd_render.h"
 #include "core/kd_traverse.h"
 #include "core/reference_builder.h"

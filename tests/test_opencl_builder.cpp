@@ -9,8 +9,8 @@
 #include <utility>
 #include <vector>
 
-#include "cl/opencl_builder.h"
-#include "cl/program_cache.h"
+#include "cl/build/opencl_builder.h"
+#include "cl/runtime/program_cache.h"
 #include "core/error.h"
 #include "core/kd_traverse.h"
 #include "core/reference_builder.h"

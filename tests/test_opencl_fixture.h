@@ -3,7 +3,7 @@
 // happens once, and the program cache keeps each program built once.
 #pragma once
 
-#include "cl/device.h"
+#include "cl/runtime/device.h"
 
 namespace kdray::test {
 

@@ -1,5 +1,5 @@
 // test_opencl_primitives.cpp — the device layer and the parallel primitives of
-// cl/kernels/primitives.cl checked against std:: on random inputs, at the sizes where chunked
+// cl/runtime/kernels/primitives.cl checked against std:: on random inputs, at the sizes where chunked
 // scans go wrong: empty, one element, powers of two and one either side, and sizes that need
 // several recursion levels.
 #include <doctest/doctest.h>
@@ -10,10 +10,10 @@
 #include <random>
 #include <vector>
 
-#include "cl/cl_error.h"
-#include "cl/device.h"
-#include "cl/primitives.h"
-#include "cl/program_cache.h"
+#include "cl/runtime/cl_error.h"
+#include "cl/runtime/device.h"
+#include "cl/runtime/primitives.h"
+#include "cl/runtime/program_cache.h"
 #include "core/error.h"
 #include "core/kd_shared.h"
 #include "tests/test_opencl_fixture.h"

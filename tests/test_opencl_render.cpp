@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "cl/opencl_renderer.h"
-#include "cl/program_cache.h"
+#include "cl/render/opencl_renderer.h"
+#include "cl/runtime/program_cache.h"
 #include "core/camera.h"
 #include "core/kd_render.h"
 #include "core/reference_builder.h"

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <vector>
 
-#include "cl/opencl_renderer.h"
+#include "cl/render/opencl_renderer.h"
 #include "core/camera.h"
 #include "core/kd_render.h"
 #include "core/reference_builder.h"

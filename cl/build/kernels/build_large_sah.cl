@@ -16,7 +16,7 @@
 #ifndef KDRAY_BUILD_LARGE_SAH_CL
 #define KDRAY_BUILD_LARGE_SAH_CL
 
-#include "cl/kernels/build_common.cl"
+#include "cl/build/kernels/build_common.cl"
 
 #define KDRAY_BIN_VALUES (6 * KDRAY_LARGE_BINS)
 

@@ -10,7 +10,7 @@
 
 #include <CL/opencl.hpp>
 
-#include "cl/device.h"
+#include "cl/runtime/device.h"
 #include "core/kd_tree.h"
 #include "core/scene.h"
 

@@ -1,5 +1,5 @@
 // cl_error.cpp — the OpenCL error-code name table and the kdray::Error messages built from it.
-#include "cl/cl_error.h"
+#include "cl/runtime/cl_error.h"
 
 namespace kdray {
 

@@ -1,4 +1,4 @@
-#include "cl/embedded_kernels.h"
+#include "cl/runtime/embedded_kernels.h"
 
 #include <string>
 

@@ -1,5 +1,5 @@
 // buffer_pool.cpp — device buffers kept between builds.
-#include "cl/buffer_pool.h"
+#include "cl/runtime/buffer_pool.h"
 
 #include <utility>
 

@@ -14,7 +14,7 @@
 
 #include <CL/opencl.hpp>
 
-#include "cl/cl_error.h"
+#include "cl/runtime/cl_error.h"
 
 namespace kdray {
 

@@ -11,7 +11,7 @@
  *                            from that buffer when there is one, else they are traced here
  *   kd_shade_traced_pixels   one work-item per pixel of one sample whose hit is in that buffer,
  *                            shaded where no reflection or refraction follows */
-#include "cl/kernels/packet_traverse.cl"
+#include "cl/render/kernels/packet_traverse.cl"
 #include "core/kd_render.h"
 
 /* The scene view the kernels read; vertex_normals is read only when has_vertex_normals (a

@@ -5,7 +5,7 @@
 #ifndef KDRAY_BUILD_SMALL_SEARCH_CL
 #define KDRAY_BUILD_SMALL_SEARCH_CL
 
-#include "cl/kernels/build_common.cl"
+#include "cl/build/kernels/build_common.cl"
 
 /* The six split candidates of a reference's box (6 floats, lo.xyz hi.xyz) in the lanes of one
  * float8: lane k = 2 * axis + side is the box's lo (side 0) or hi (side 1) on that axis; lanes 6

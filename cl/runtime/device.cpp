@@ -1,6 +1,6 @@
 // device.cpp — platform/device enumeration and selection, and the context and queue of the chosen
 // device.
-#include "cl/device.h"
+#include "cl/runtime/device.h"
 
 #include <algorithm>
 #include <cctype>
@@ -10,7 +10,7 @@
 
 #include <unistd.h>
 
-#include "cl/cl_error.h"
+#include "cl/runtime/cl_error.h"
 #include "core/error.h"
 
 namespace kdray {

@@ -3,8 +3,8 @@
 // reference image is this one's oracle.
 #pragma once
 
-#include "cl/device.h"
-#include "cl/opencl_builder.h"
+#include "cl/runtime/device.h"
+#include "cl/build/opencl_builder.h"
 #include "core/frame.h"
 #include "core/kd_tree.h"
 #include "core/render_setup.h"

@@ -8,10 +8,10 @@
 #include <utility>
 #include <vector>
 
-#include "cl/cl_error.h"
-#include "cl/device_memory.h"
-#include "cl/opencl_builder.h"
-#include "cl/primitives.h"
+#include "cl/runtime/cl_error.h"
+#include "cl/runtime/device_memory.h"
+#include "cl/build/opencl_builder.h"
+#include "cl/runtime/primitives.h"
 #include "core/error.h"
 
 namespace kdray::build_detail {

@@ -1,10 +1,10 @@
 // device_memory.cpp — counted device buffers and growable device arrays.
-#include "cl/device_memory.h"
+#include "cl/runtime/device_memory.h"
 
 #include <algorithm>
 #include <utility>
 
-#include "cl/cl_error.h"
+#include "cl/runtime/cl_error.h"
 
 namespace kdray {
 

@@ -11,7 +11,7 @@
 
 #include <CL/opencl.hpp>
 
-#include "cl/buffer_pool.h"
+#include "cl/runtime/buffer_pool.h"
 
 namespace kdray {
 
@@ -46,6 +46,9 @@ class ClDevice {
     const cl::Device& device() const { return device_; }
     cl::CommandQueue& queue() { return queue_; }
     const ClDeviceInfo& info() const { return info_; }
+    /// Whether the device is the host's own processor (PoCL's CPU device, say), where the stages
+    /// that are shaped by device kind take their CPU shape. The one place kdray asks the kind.
+    bool is_cpu() const { return info_.type == "CPU"; }
 
     /// A device buffer of `bytes` (at least 1, since OpenCL forbids empty buffers). Throws Error
     /// naming `what` and the size when it exceeds CL_DEVICE_MAX_MEM_ALLOC_SIZE or fails.

@@ -1,12 +1,12 @@
-#include "cl/opencl_renderer.h"
+#include "cl/render/opencl_renderer.h"
 
 #include <algorithm>
 #include <cstdint>
 #include <string>
 
-#include "cl/cl_error.h"
-#include "cl/launch.h"
-#include "cl/program_cache.h"
+#include "cl/runtime/cl_error.h"
+#include "cl/runtime/launch.h"
+#include "cl/runtime/program_cache.h"
 #include "core/kd_render.h"
 
 namespace kdray {
@@ -46,7 +46,7 @@ bool use_packets(const ClDevice& device, kd_u32 intersect, RenderInputs::Packets
         case RenderInputs::Packets::Auto:
             break;
     }
-    return device.info().type == "CPU";
+    return device.is_cpu();
 }
 
 /// The per-pixel kernel of a frame. kd_shade_traced_pixels when the packets traced its only

@@ -33,9 +33,9 @@
  * let a node cut its flat triangles off at its own face (a flat child, e.g. a wall): the lo lane
  * at the node's lo face, the hi lane at its hi face. Planar triangles below only cost the BART
  * Robots 13% of SAH (reference builder forced to that choice: 553.8 -> 623.8). */
-#include "cl/kernels/build_common.cl"
-#include "cl/kernels/build_small_reclip.cl"
-#include "cl/kernels/build_small_search.cl"
+#include "cl/build/kernels/build_common.cl"
+#include "cl/build/kernels/build_small_reclip.cl"
+#include "cl/build/kernels/build_small_search.cl"
 
 /* Split candidates (§4.2, "small node preprocessing"): for each candidate plane the set of the
  * root's triangles below it and the set above it, by the same rule as every split (kd_classify

@@ -3,7 +3,7 @@
 // stages are in opencl_builder_small.cpp, the state they share in opencl_build_state.h. The host
 // reads back only the few counts that size the next launch (one read per level). The algorithm
 // itself lives in the kernels; the comments there cite the paper's sections.
-#include "cl/opencl_builder.h"
+#include "cl/build/opencl_builder.h"
 
 #include <algorithm>
 #include <array>
@@ -13,12 +13,12 @@
 #include <utility>
 #include <vector>
 
-#include "cl/cl_error.h"
-#include "cl/device_memory.h"
-#include "cl/launch.h"
-#include "cl/opencl_build_state.h"
-#include "cl/primitives.h"
-#include "cl/program_cache.h"
+#include "cl/runtime/cl_error.h"
+#include "cl/runtime/device_memory.h"
+#include "cl/runtime/launch.h"
+#include "cl/build/opencl_build_state.h"
+#include "cl/runtime/primitives.h"
+#include "cl/runtime/program_cache.h"
 #include "core/error.h"
 
 namespace kdray {
@@ -67,7 +67,7 @@ Kernels::Kernels(const ClDevice& device, int large_split_bins) {
     // CPU compilers may have no vector popcount (build_small_search.cl, kd_popcount8).
     const cl::Program small = cached_program(
         device, "build_small.cl",
-        defines + " -DKDRAY_SWAR_POPCOUNT=" + (device.info().type == "CPU" ? "1" : "0"));
+        defines + " -DKDRAY_SWAR_POPCOUNT=" + (device.is_cpu() ? "1" : "0"));
     const cl::Program output = cached_program(device, "build_output.cl", defines);
     compute_aabbs = make_kernel(large, "kd_compute_aabbs");
     if (large_split_bins > 0) bin_large = make_kernel(large, "kd_bin_large_chunks");

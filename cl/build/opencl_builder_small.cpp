@@ -8,8 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "cl/launch.h"
-#include "cl/opencl_build_state.h"
+#include "cl/runtime/launch.h"
+#include "cl/build/opencl_build_state.h"
 
 namespace kdray::build_detail {
 

@@ -9,7 +9,7 @@
  *                            and its first leaf index
  *   kd_write_nodes           the large stage's nodes: KdNode and leaf triangle ids
  *   kd_write_small_subtrees  per small root: its subtree, already in preorder, moved into place */
-#include "cl/kernels/build_common.cl"
+#include "cl/build/kernels/build_common.cl"
 
 __kernel void kd_size_subtrees(uint begin, uint count, __global const KdBuildNode* records,
                                __global const uint* small_node_count,

@@ -1,12 +1,12 @@
 // program_cache.cpp — the process-wide cache of built OpenCL programs.
-#include "cl/program_cache.h"
+#include "cl/runtime/program_cache.h"
 
 #include <map>
 #include <mutex>
 #include <tuple>
 
-#include "cl/cl_error.h"
-#include "cl/embedded_kernels.h"
+#include "cl/runtime/cl_error.h"
+#include "cl/runtime/embedded_kernels.h"
 #include "core/error.h"
 
 namespace kdray {

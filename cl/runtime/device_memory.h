@@ -17,7 +17,7 @@
 
 #include <CL/opencl.hpp>
 
-#include "cl/device.h"
+#include "cl/runtime/device.h"
 
 namespace kdray {
 

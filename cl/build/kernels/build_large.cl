@@ -25,7 +25,7 @@
  * numbers as -D defines). One scan over all segments at once gives, for each slot and kind, its
  * rank: the index of a new large node, its first reference, ... A value is the difference of
  * neighbouring scanned entries, so the scans run in place. */
-#include "cl/kernels/build_common.cl"
+#include "cl/build/kernels/build_common.cl"
 
 /* Step 1 of §4: each triangle's bounding box, and the identity reference list of the root. */
 __kernel void kd_compute_aabbs(__global const float* triangles, uint count,
@@ -44,7 +44,7 @@ __kernel void kd_compute_aabbs(__global const float* triangles, uint count,
 }
 
 #if KDRAY_LARGE_BINS > 0
-#include "cl/kernels/build_large_sah.cl"
+#include "cl/build/kernels/build_large_sah.cl"
 
 /* The SAH bins of chunk c's references (build_large_sah.cl). */
 __kernel void kd_bin_large_chunks(__global const float* ref_box, __global const uint* node_start,

@@ -1,4 +1,4 @@
-// primitives.h — data-parallel primitives on the device (cl/kernels/primitives.cl): exclusive scan,
+// primitives.h — data-parallel primitives on the device (cl/runtime/kernels/primitives.cl): exclusive scan,
 // stream compaction and segmented box reduction, the building blocks of Zhou et al.'s (2008)
 // kd-tree construction. All calls only enqueue work on the device's in-order queue, except where a
 // count must come back to the host (compact).
@@ -9,7 +9,7 @@
 
 #include <CL/opencl.hpp>
 
-#include "cl/device.h"
+#include "cl/runtime/device.h"
 
 namespace kdray {
 

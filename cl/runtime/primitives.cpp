@@ -1,10 +1,10 @@
 // primitives.cpp — host side of the scan, compaction and segmented reduction kernels.
-#include "cl/primitives.h"
+#include "cl/runtime/primitives.h"
 
 #include <algorithm>
 
-#include "cl/launch.h"
-#include "cl/program_cache.h"
+#include "cl/runtime/launch.h"
+#include "cl/runtime/program_cache.h"
 
 namespace kdray {
 
@@ -43,7 +43,7 @@ void ClPrimitives::exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, s
     // On a CPU device one work-item per element costs more than the adding: by chunk, a 10^6
     // scan on PoCL (2 cores, bench_primitives, median of 7) went from 3.2 to 0.51 ms, 10^5 from
     // 0.38 to 0.09. GPUs keep one item per element, which coalesces.
-    if (device_.info().type == "CPU")
+    if (device_.is_cpu())
         enqueue_kernel(queue, add_offsets_by_chunk_, chunks, out, cl_uint(n), cl_uint(chunk),
                        cl_uint(chunks), sums);
     else

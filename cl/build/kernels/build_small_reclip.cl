@@ -4,7 +4,7 @@
 #ifndef KDRAY_BUILD_SMALL_RECLIP_CL
 #define KDRAY_BUILD_SMALL_RECLIP_CL
 
-#include "cl/kernels/build_small_search.cl"
+#include "cl/build/kernels/build_small_search.cl"
 
 /* Re-clipping (not in Zhou et al.): the masks hold the small root's boxes, which no split inside
  * its subtree clips, so a long diagonal triangle that a few splits have cut keeps the root's box:
