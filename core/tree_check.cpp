@@ -1,7 +1,7 @@
 // tree_check.cpp — the tree invariant checker (tree_check.h). It trusts nothing a builder says:
 // it walks the nodes, rebuilds every box from the split planes, and for coverage clips each
-// triangle down the tree with its own polygon clipping, so a builder's bug cannot hide in code the
-// checker shares with it.
+// triangle down the tree (in double, with the shared clipping routine of core/kd_clip.h), so a
+// builder's bug in choosing splits, boxes or leaf lists cannot hide in code the checker shares.
 #include "core/tree_check.h"
 
 #include <algorithm>
@@ -11,6 +11,10 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+// The checker clips in double (kd_clip.h's coordinate type).
+#define KDRAY_CLIP_REAL double
+#include "core/kd_clip.h"
 
 namespace kdray {
 namespace {
@@ -26,25 +30,18 @@ std::string box_string(const Aabb& b) {
 /// A convex polygon in double precision: a triangle clipped by planes (a zero-area triangle
 /// degenerates to its segment or point and clips the same way).
 using Polygon = std::vector<std::array<double, 3>>;
+static_assert(sizeof(std::array<double, 3>) == 3 * sizeof(double), "points are double[3]");
 
-/// Part of `poly` with x[axis] <= pos (keep_above false) or x[axis] >= pos (Sutherland–Hodgman).
+/// Part of `poly` with x[axis] <= pos (keep_above false) or x[axis] >= pos, by the one
+/// Sutherland–Hodgman routine (core/kd_clip.h). The checker's own logic (boxes rebuilt from the
+/// splits, coverage down the tree) is independent of the builders; the routine itself is tested
+/// against closed forms (tests/test_reference_builder.cpp).
 Polygon clip_half_space(const Polygon& poly, int axis, double pos, bool keep_above) {
-    Polygon out;
-    auto inside = [&](const std::array<double, 3>& p) {
-        return keep_above ? p[axis] >= pos : p[axis] <= pos;
-    };
-    for (std::size_t i = 0; i < poly.size(); ++i) {
-        const auto& a = poly[i];
-        const auto& b = poly[(i + 1) % poly.size()];
-        if (inside(a)) out.push_back(a);
-        if (inside(a) != inside(b)) {
-            const double t = (pos - a[axis]) / (b[axis] - a[axis]);
-            std::array<double, 3> x;
-            for (int k = 0; k < 3; ++k) x[k] = a[k] + t * (b[k] - a[k]);
-            x[axis] = pos;
-            out.push_back(x);
-        }
-    }
+    Polygon out(poly.size() + 1);
+    const kd_u32 count = kd_clip_polygon_to_plane(
+        reinterpret_cast<const double(*)[3]>(poly.data()), kd_u32(poly.size()), kd_u32(axis), pos,
+        keep_above, reinterpret_cast<double(*)[3]>(out.data()));
+    out.resize(count);
     return out;
 }
 
