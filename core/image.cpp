@@ -3,8 +3,6 @@
 // a failed write leaves nothing behind.
 #include "core/image.h"
 
-#include <unistd.h>
-
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -16,6 +14,7 @@
 #include <string>
 #include <system_error>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 
 namespace kdray {
@@ -30,41 +29,24 @@ std::string lower_extension(const fs::path& path) {
     return ext;
 }
 
-/// The temporary name for `path`: hidden, in the same directory (so the rename is atomic on one
-/// file system), unique per process, and ending in the real extension so OIIO picks the format:
-/// dir/frame.png -> dir/.frame.png.tmp123.png.
-fs::path temporary_path(const fs::path& path) {
-    // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "." + std::string.
-    std::string name = ".";
-    name += path.filename().string();
-    name += ".tmp" + std::to_string(::getpid());
-    name += path.extension().string();
-    return path.parent_path() / name;
-}
-
-/// Opens `spec` at a temporary name, lets `write` fill it, closes it and renames it onto `path`.
-/// On any failure the temporary file is removed and an Error names `path` and OIIO's message.
-void write_atomically(const fs::path& path, const OIIO::ImageSpec& spec,
+/// Writes `spec` to `path` through OpenImageIO, atomically (core/atomic_file.h): `write` fills
+/// the opened file. An Error names `path` and OIIO's message.
+void write_image_file(const fs::path& path, const OIIO::ImageSpec& spec,
                       const std::function<bool(OIIO::ImageOutput&)>& write) {
-    const fs::path temp = temporary_path(path);
-    auto fail = [&](const std::string& why) {
-        std::error_code ignored;
-        fs::remove(temp, ignored);
-        throw Error("cannot write " + path.string() + ": " + why);
-    };
-    auto out = OIIO::ImageOutput::create(temp.string());
-    if (!out) fail(OIIO::geterror());
-    if (!out->open(temp.string(), spec)) fail(out->geterror());
-    if (!write(*out)) {
-        std::string why = out->geterror();
-        out->close();
-        fail(why);
-    }
-    if (!out->close()) fail(out->geterror());
-    out.reset();
-    std::error_code ec;
-    fs::rename(temp, path, ec);
-    if (ec) fail("renaming " + temp.string() + ": " + ec.message());
+    write_atomically(path, [&](const fs::path& temp) {
+        auto fail = [&](const std::string& why) {
+            throw Error("cannot write " + path.string() + ": " + why);
+        };
+        auto out = OIIO::ImageOutput::create(temp.string());
+        if (!out) fail(OIIO::geterror());
+        if (!out->open(temp.string(), spec)) fail(out->geterror());
+        if (!write(*out)) {
+            std::string why = out->geterror();
+            out->close();
+            fail(why);
+        }
+        if (!out->close()) fail(out->geterror());
+    });
 }
 
 /// The sRGB transfer function (IEC 61966-2-1) of a linear value, clamped to [0, 1] first; NaN
@@ -97,13 +79,13 @@ void write_image(const fs::path& path, const Image& image) {
             pixels[i] = std::uint8_t(std::lround(srgb_encode(image.rgb[i]) * 255.0f));
         OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::UINT8);
         spec.attribute("oiio:ColorSpace", "sRGB");
-        write_atomically(path, spec, [&](OIIO::ImageOutput& out) {
+        write_image_file(path, spec, [&](OIIO::ImageOutput& out) {
             return out.write_image(OIIO::TypeDesc::UINT8, pixels.data());
         });
     } else if (ext == ".exr") {
         OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
         spec.attribute("oiio:ColorSpace", "linear");
-        write_atomically(path, spec, [&](OIIO::ImageOutput& out) {
+        write_image_file(path, spec, [&](OIIO::ImageOutput& out) {
             return out.write_image(OIIO::TypeDesc::FLOAT, image.rgb.data());
         });
     } else {
@@ -144,7 +126,7 @@ void write_aov(const fs::path& path, const HitBuffer& hits) {
             std::memcpy(pixel + 8, n, 12);
         }
     }
-    write_atomically(path, spec, [&](OIIO::ImageOutput& out) {
+    write_image_file(path, spec, [&](OIIO::ImageOutput& out) {
         return out.write_image(OIIO::TypeDesc::UNKNOWN, buffer.data(), OIIO::stride_t(stride));
     });
 }
