@@ -1,7 +1,7 @@
 // obj_loader.cpp — load_obj: an OBJ file (and its MTL libraries) into a Scene.
 //
 // The file is read once and pre-scanned by validate_obj (obj_validate.h), which rejects what
-// Debian's tinyobjloader would silently get wrong; then tinyobjloader's ObjReader parses it with
+// Debian's tinyobjloader would silently get wrong; then tinyobjloader parses the same bytes with
 // triangulate = true, and the triangles are numbered in the order it lists them, shape by shape,
 // face by face, as conventions.md requires.
 #include <sys/stat.h>
@@ -13,8 +13,10 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <istream>
 #include <memory>
 #include <set>
+#include <streambuf>
 #include <string_view>
 
 #include "core/error.h"
@@ -43,6 +45,43 @@ std::string read_whole_file(const std::filesystem::path& path) {
     // A directory opens on Linux, and fails only on the read (EISDIR).
     if (std::ferror(file.get())) throw Error(name + ": cannot open: " + std::strerror(errno));
     return text;
+}
+
+/// A read-only stream over bytes already in memory (no copy of a file of tens of megabytes).
+class MemoryStreamBuffer : public std::streambuf {
+  public:
+    explicit MemoryStreamBuffer(std::string_view bytes) {
+        char* begin = const_cast<char*>(bytes.data());  // never written: get area only
+        setg(begin, begin, begin + bytes.size());
+    }
+};
+
+struct ParsedObj {
+    tinyobj::attrib_t attrib;
+    std::vector<tinyobj::shape_t> shapes;
+    std::vector<tinyobj::material_t> materials;
+    std::string warnings;
+};
+
+/// tinyobjloader's parse of the OBJ text `text` of file `name`: what ObjReader::ParseFromFile
+/// does (triangulate, no vertex colours, MTL libraries looked up in the OBJ's folder), from the
+/// bytes in memory instead of a second read of the file.
+ParsedObj parse_obj_text(std::string_view text, const std::string& name) {
+    std::string mtl_folder;
+    if (const std::size_t slash = name.find_last_of('/'); slash != std::string::npos)
+        mtl_folder = name.substr(0, slash + 1);
+    tinyobj::MaterialFileReader mtl_reader(mtl_folder);
+    MemoryStreamBuffer buffer(text);
+    std::istream in(&buffer);
+    ParsedObj obj;
+    std::string error;
+    if (!tinyobj::LoadObj(&obj.attrib, &obj.shapes, &obj.materials, &obj.warnings, &error, &in,
+                          &mtl_reader, /*triangulate=*/true, /*default_vcols_fallback=*/false)) {
+        while (!error.empty() && (error.back() == '\n' || error.back() == '\r')) error.pop_back();
+        std::replace(error.begin(), error.end(), '\n', ';');
+        throw Error(name + ": " + (error.empty() ? "tinyobjloader cannot parse the file" : error));
+    }
+    return obj;
 }
 
 Vec3 vec3(const tinyobj::real_t* v) {
@@ -160,32 +199,24 @@ Scene load_obj(const std::filesystem::path& path) {
         }
     }
 
-    tinyobj::ObjReaderConfig config;
-    config.triangulate = true;
-    config.vertex_color = false;
-    tinyobj::ObjReader reader;
-    if (!reader.ParseFromFile(name, config)) {
-        std::string why = reader.Error();
-        while (!why.empty() && (why.back() == '\n' || why.back() == '\r')) why.pop_back();
-        std::replace(why.begin(), why.end(), '\n', ';');
-        throw Error(name + ": " + (why.empty() ? "tinyobjloader cannot parse the file" : why));
-    }
-    for (std::string& w : convert_warnings(reader.Warning(), name, library_missing))
+    // tinyobjloader parses the bytes the pre-scan read (one read of the file per load), as its
+    // ObjReader::ParseFromFile would parse the file: triangulated, MTL files beside the OBJ.
+    const ParsedObj obj = parse_obj_text(text, name);
+    for (std::string& w : convert_warnings(obj.warnings, name, library_missing))
         scene.warnings.push_back(std::move(w));
 
-    for (const tinyobj::material_t& m : reader.GetMaterials())
-        scene.materials.push_back(to_material(m));
+    for (const tinyobj::material_t& m : obj.materials) scene.materials.push_back(to_material(m));
     const auto default_material = static_cast<kd_u32>(scene.materials.size());
     bool default_needed = false;
 
     // Triangles, numbered shape by shape and face by face in tinyobjloader's order.
-    const std::vector<tinyobj::real_t>& vertices = reader.GetAttrib().vertices;
+    const std::vector<tinyobj::real_t>& vertices = obj.attrib.vertices;
     scene.triangles.reserve(prescan.triangles * KDRAY_FLOATS_PER_TRIANGLE);
     scene.material_ids.reserve(prescan.triangles);
     // Each corner's `vn` index (-1: none), made into scene.vertex_normals once all are known.
     std::vector<int> normal_indices;
     bool any_normal = false;
-    for (const tinyobj::shape_t& shape : reader.GetShapes()) {
+    for (const tinyobj::shape_t& shape : obj.shapes) {
         const tinyobj::mesh_t& mesh = shape.mesh;
         std::size_t offset = 0;
         for (std::size_t f = 0; f < mesh.num_face_vertices.size(); ++f) {
@@ -215,7 +246,7 @@ Scene load_obj(const std::filesystem::path& path) {
         }
     }
     if (default_needed) scene.materials.push_back(Material{.name = "default"});
-    if (any_normal) set_vertex_normals(scene, normal_indices, reader.GetAttrib().normals);
+    if (any_normal) set_vertex_normals(scene, normal_indices, obj.attrib.normals);
 
     if (scene.triangle_count() == 0) throw Error(name + ": the scene has no triangles");
     if (scene.triangle_count() != prescan.triangles)
