@@ -20,6 +20,7 @@
 
 #include "core/camera.h"
 #include "core/error.h"
+#include "core/input_file.h"
 
 namespace kdray {
 namespace {
@@ -298,15 +299,9 @@ RenderSettings parse_render_json(const std::string& text, const std::filesystem:
 }
 
 RenderSettings load_render_file(const std::filesystem::path& path) {
-    // A directory opens as a stream on Linux and only fails on reading; say so plainly.
-    if (std::error_code ec; std::filesystem::is_directory(path, ec))
-        throw Error(path.string() + ": cannot open: " + std::strerror(EISDIR));
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(path.string() + ": cannot open: " + std::strerror(errno));
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) throw Error(path.string() + ": cannot read: " + std::strerror(errno));
-    return parse_render_json(text.str(), path);
+    // Render files are a few kilobytes (a long keyframed camera, a few hundred); 64 MiB is far
+    // past any real one.
+    return parse_render_json(read_input_file(path, "render file", std::uint64_t(64) << 20), path);
 }
 
 }  // namespace kdray
