@@ -43,6 +43,8 @@ void create_output_dir(const std::filesystem::path& dir) {
     if (ec || !std::filesystem::is_directory(dir))
         throw Error(dir.string() + ": cannot create the output folder: " +
                     (ec ? ec.message() : std::string("a file of that name exists")));
+    // What a killed run (SIGKILL mid-write) left behind would otherwise stay for ever.
+    remove_stale_temporaries(dir);
 }
 
 /// One line on a terminal, rewritten in place: frame i/n, frames per second, time left.
@@ -193,8 +195,7 @@ int run_render(const RenderCommand& command) {
     // loader beside them only preempts their workers (the Kitchen's large stage: 33 -> 48 ms on
     // 2 cores), so it overlaps writing the files instead.
     const bool compute_on_host = command.builder.builder == "reference" ||
-                                 command.tracer == "reference" ||
-                                 session.device().is_cpu();
+                                 command.tracer == "reference" || session.device().is_cpu();
     auto load_async = [&](std::size_t frame) {
         return std::async(std::launch::async, [path = inputs[frame]] {
             auto start = Clock::now();
