@@ -1,12 +1,14 @@
 // `kdray build SCENE.obj`: load, build, check nothing was lost, print the tree's statistics.
 #include <algorithm>
 #include <iostream>
+#include <memory>
 #include <vector>
 
+#include "cl/backends.h"
 #include "cli/commands.h"
 #include "cli/report.h"
-#include "cli/tree_builder.h"
 #include "core/scene.h"
+#include "core/stats_json.h"
 #include "core/tree_file.h"
 
 namespace kdray::cli {
@@ -14,14 +16,15 @@ namespace kdray::cli {
 int run_build(const BuildCommand& command) {
     Scene scene = load_obj(command.scene);
     DeviceSession session(command.builder.device);
-    TreeBuilder builder(command.builder, session);
-    builder.prepare();
-    BuiltTree built = builder.build(scene);
+    const std::unique_ptr<TreeBuilder> builder =
+        make_tree_builder(command.builder.builder, command.builder.params, session);
+    builder->prepare();
+    BuiltTree built = builder->build(scene);
     std::vector<double> samples;
     if (command.repeat > 1) {
         // The first build above was the warm-up (device opened, programs built, caches filled).
         for (int i = 0; i < command.repeat; ++i) {
-            built = builder.build(scene);
+            built = builder->build(scene);
             samples.push_back(built.report.build_ms);
         }
         std::vector<double> sorted = samples;

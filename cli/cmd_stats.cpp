@@ -1,16 +1,17 @@
 // `kdray stats [PATH...]`: statistics of OBJ scenes (built with the chosen builder), tree files
 // or render output folders; with no PATH, the OpenCL devices kdray can use and its defaults.
-#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 
+#include "cl/backends.h"
 #include "cli/commands.h"
 #include "cli/devices.h"
 #include "cli/report.h"
-#include "cli/tree_builder.h"
 #include "core/error.h"
 #include "core/scene.h"
+#include "core/stats_json.h"
 #include "core/tree_file.h"
 #include "core/tree_stats.h"
 
@@ -45,37 +46,9 @@ nlohmann::json read_render_stats(const std::filesystem::path& dir) {
     return stats;
 }
 
-/// Summary over the frames of one or more render folders (the shards of one animation).
-nlohmann::json summarise_frames(const std::vector<nlohmann::json>& runs) {
-    double total_ms = 0, worst_ms = 0, build_ms = 0, trace_ms = 0;
-    std::vector<std::size_t> numbers;
-    for (const nlohmann::json& run : runs)
-        for (const nlohmann::json& frame : run["frames"]) {
-            double ms = frame.value("frame_ms", 0.0);
-            total_ms += ms;
-            worst_ms = std::max(worst_ms, ms);
-            build_ms += frame.value("build_ms", 0.0);
-            trace_ms += frame.value("trace_ms", 0.0);
-            numbers.push_back(frame.value("frame", std::size_t(0)));
-        }
-    std::sort(numbers.begin(), numbers.end());
-    const double n = double(numbers.size());
-    const double mean_ms = n > 0 ? total_ms / n : 0.0;
-    nlohmann::json j = {{"frames", numbers.size()},
-                        {"mean_frame_ms", mean_ms},
-                        {"worst_frame_ms", worst_ms},
-                        {"mean_build_ms", n > 0 ? build_ms / n : 0.0},
-                        {"mean_trace_ms", n > 0 ? trace_ms / n : 0.0},
-                        {"frames_per_second", mean_ms > 0 ? 1000.0 / mean_ms : 0.0},
-                        {"frame_numbers", numbers}};
-    if (std::adjacent_find(numbers.begin(), numbers.end()) != numbers.end())
-        j["warning"] = "some frame numbers appear in more than one folder";
-    return j;
-}
-
 nlohmann::json render_folder_json(const std::filesystem::path& dir) {
     nlohmann::json stats = read_render_stats(dir);
-    nlohmann::json j = summarise_frames({stats});
+    nlohmann::json j = summarise_frames(stats["frames"]);
     j["folder"] = dir.string();
     j["builder"] = stats.value("builder", "");
     j["tracer"] = stats.value("tracer", "");
@@ -105,15 +78,21 @@ int run_stats(const StatsCommand& command) {
         out = {{"devices", list_devices_json()}, {"defaults", defaults_json(command.builder)}};
     } else {
         DeviceSession session(command.builder.device);
-        TreeBuilder builder(command.builder, session);
+        const std::unique_ptr<TreeBuilder> builder =
+            make_tree_builder(command.builder.builder, command.builder.params, session);
         nlohmann::json items = nlohmann::json::array();
-        for (const std::string& path : command.paths) items.push_back(path_json(path, builder));
+        for (const std::string& path : command.paths) items.push_back(path_json(path, *builder));
         out = command.paths.size() == 1 ? items[0] : nlohmann::json{{"items", items}};
         // Several render folders are the shards of one animation: one summary over them all.
-        std::vector<nlohmann::json> runs;
-        for (const std::string& path : command.paths)
-            if (std::filesystem::is_directory(path)) runs.push_back(read_render_stats(path));
-        if (runs.size() > 1) out["combined"] = summarise_frames(runs);
+        nlohmann::json frames = nlohmann::json::array();
+        std::size_t folders = 0;
+        for (const std::string& path : command.paths) {
+            if (!std::filesystem::is_directory(path)) continue;
+            for (const nlohmann::json& frame : read_render_stats(path)["frames"])
+                frames.push_back(frame);
+            ++folders;
+        }
+        if (folders > 1) out["combined"] = summarise_frames(frames);
     }
     if (command.json) {
         std::cout << out.dump(2) << "\n";

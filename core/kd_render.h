@@ -78,22 +78,42 @@ KDRAY_INLINE void kd_set3(kd_f32* out, kd_f32 x, kd_f32 y, kd_f32 z) {
 KDRAY_INLINE kd_f32 kd_dot3(const kd_f32* a, const kd_f32* b) {
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
+/* The camera ray's arithmetic, written once as macros over any float type: kd_camera_ray and
+ * kd_primary_ray below evaluate them on scalars, render.cl's kd_primary_packet on the float16
+ * lanes of a packet, with the same operations in the same order, so that each lane's ray is the
+ * scalar one bit for bit.
+ *   KDRAY_INV_LENGTH3   1 / |(x, y, z)|, by which kd_normalize3 scales
+ *   KDRAY_SCREEN_X/Y    conventions.md's sx and sy of image position (px, py) in pixels
+ *   KDRAY_CAMERA_DIR    axis a of the direction before normalising, f + (r * sx + u * sy)
+ *   KDRAY_SAMPLE_KEY    what kd_hash turns into the jitter of sample r of pixel (x, y)
+ *   KDRAY_UNIT_FLOAT    a hash's top 24 bits as a float in [0, 1), through `to_float` */
+#define KDRAY_INV_LENGTH3(x, y, z) (1.0f / KDRAY_SQRT((x) * (x) + (y) * (y) + (z) * (z)))
+#define KDRAY_SCREEN_X(view, px) \
+    ((2.0f * (px) / (kd_f32)(view)->width - 1.0f) * (view)->tan_half_fov * (view)->aspect)
+#define KDRAY_SCREEN_Y(view, py) \
+    ((1.0f - 2.0f * (py) / (kd_f32)(view)->height) * (view)->tan_half_fov)
+#define KDRAY_CAMERA_DIR(view, a, sx, sy) \
+    ((view)->forward[a] + ((view)->right[a] * (sx) + (view)->up[a] * (sy)))
+#define KDRAY_SAMPLE_KEY(view, x, y, r) \
+    (((y) * (view)->width + (x)) * 0x9E3779B9u ^ kd_hash((r) + (view)->seed))
+#define KDRAY_UNIT_FLOAT(to_float, h) (to_float((h) >> 8) * (1.0f / 16777216.0f))
+
 /* Unit vector, computed as Embree's peer does (multiply by 1 / length), so that centre rays
  * match it bit for bit. */
 KDRAY_INLINE void kd_normalize3(kd_f32* a) {
-    const kd_f32 inv = 1.0f / KDRAY_SQRT(kd_dot3(a, a));
+    const kd_f32 inv = KDRAY_INV_LENGTH3(a[0], a[1], a[2]);
     kd_set3(a, a[0] * inv, a[1] * inv, a[2] * inv);
 }
 
 /* The ray through image position (px, py) in pixels, conventions.md's camera model, evaluated in
  * the same order as ../shared/peers/embree: d = normalize(f + (r * sx + u * sy)). */
 KDRAY_HOT_INLINE KdRay kd_camera_ray(const KdView* view, kd_f32 px, kd_f32 py) {
-    const kd_f32 sx = (2.0f * px / (kd_f32)view->width - 1.0f) * view->tan_half_fov * view->aspect;
-    const kd_f32 sy = (1.0f - 2.0f * py / (kd_f32)view->height) * view->tan_half_fov;
+    const kd_f32 sx = KDRAY_SCREEN_X(view, px);
+    const kd_f32 sy = KDRAY_SCREEN_Y(view, py);
     KdRay ray;
     for (int a = 0; a < 3; ++a) {
         ray.org[a] = view->origin[a];
-        ray.dir[a] = view->forward[a] + (view->right[a] * sx + view->up[a] * sy);
+        ray.dir[a] = KDRAY_CAMERA_DIR(view, a, sx, sy);
     }
     kd_normalize3(ray.dir);
     ray.tmin = 0.0f;
@@ -117,7 +137,7 @@ KDRAY_INLINE kd_u32 kd_hash(kd_u32 x) {
     return x;
 }
 KDRAY_INLINE kd_f32 kd_unit_float(kd_u32 h) {
-    return (kd_f32)(h >> 8) * (1.0f / 16777216.0f);
+    return KDRAY_UNIT_FLOAT((kd_f32), h);
 }
 
 /* Geometric unit normal of a triangle, facing against `dir`. */
@@ -471,7 +491,7 @@ KDRAY_INLINE kd_u32 kd_primary_rays_per_pixel(const KdView* view) {
 KDRAY_HOT_INLINE KdRay kd_primary_ray(const KdView* view, kd_u32 x, kd_u32 y, kd_u32 r) {
     if (view->spp <= 1u || r == view->spp)
         return kd_camera_ray(view, (kd_f32)x + 0.5f, (kd_f32)y + 0.5f);
-    const kd_u32 h = kd_hash((y * view->width + x) * 0x9E3779B9u ^ kd_hash(r + view->seed));
+    const kd_u32 h = kd_hash(KDRAY_SAMPLE_KEY(view, x, y, r));
     return kd_camera_ray(view, (kd_f32)x + kd_unit_float(h), (kd_f32)y + kd_unit_float(kd_hash(h)));
 }
 

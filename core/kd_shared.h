@@ -233,29 +233,4 @@ static_assert(sizeof(KdView) == 112, "KdView is 112 bytes on every device");
 static_assert(sizeof(KdRayCounts) == 16, "KdRayCounts is 16 bytes on every device");
 #endif
 
-/* KdBuildNode — 32 bytes. A node of the OpenCL builder (Zhou et al. 2008) before its output stage
- * lays the tree out in preorder. Node ids are handed out level by level, so a child's id is always
- * larger than its parent's.
- *   axis         inner: split axis 0/1/2; leaf: KDRAY_LEAF_AXIS; small root: 4.
- *   split        inner: split plane position.
- *   child[2]     inner: node ids of the below and above children.
- *   leaf_count   leaf: number of triangles.
- *   leaf_first   leaf: first entry of its run in the builder's leaf reference store.
- *   mask_lo/hi   unused (0).
- * A small root of the small-node stage has axis 4 (KDRAY_SMALL_ROOT_AXIS in build_common.cl) and
- * leaf_first its small root index: that stage writes its subtree in records of its own. */
-typedef struct KdBuildNode {
-    kd_u32 axis;
-    kd_f32 split;
-    kd_u32 child[2];
-    kd_u32 leaf_count;
-    kd_u32 leaf_first;
-    kd_u32 mask_lo;
-    kd_u32 mask_hi;
-} KdBuildNode;
-
-#ifndef KDRAY_DEVICE_CODE
-static_assert(sizeof(KdBuildNode) == 32, "KdBuildNode is 32 bytes on every device");
-#endif
-
 #endif /* KDRAY_KD_SHARED_H */

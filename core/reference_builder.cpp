@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -206,6 +207,16 @@ KdTree build_reference(const Scene& scene, const BuildParams& params) {
                     std::to_string(scene.triangle_count()) +
                     " triangles, more than kd_shared.h's 30-bit triangle ids allow");
     return ReferenceBuilder(scene, params).build();
+}
+
+BuiltTree ReferenceTreeBuilder::build(const Scene& scene) {
+    BuiltTree built;
+    const auto start = std::chrono::steady_clock::now();
+    built.tree = build_reference(scene, params_);
+    built.report.build_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    built.report.timings_ms.push_back({"build", built.report.build_ms});
+    return built;
 }
 
 }  // namespace kdray

@@ -6,9 +6,23 @@
 
 #include "core/kd_tree.h"
 #include "core/scene.h"
+#include "core/tree_builder.h"
 
 namespace kdray {
 
 KdTree build_reference(const Scene& scene, const BuildParams& params = {});
+
+/// build_reference behind the TreeBuilder interface, timed as one stage ("build").
+class ReferenceTreeBuilder final : public TreeBuilder {
+  public:
+    explicit ReferenceTreeBuilder(const BuildParams& params) : params_(params) {}
+
+    BuiltTree build(const Scene& scene) override;
+    std::string description() override { return "reference (CPU, full SAH)"; }
+    bool computes_on_host() override { return true; }
+
+  private:
+    BuildParams params_;
+};
 
 }  // namespace kdray

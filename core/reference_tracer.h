@@ -11,6 +11,7 @@
 #include "core/render_file.h"
 #include "core/render_setup.h"
 #include "core/scene.h"
+#include "core/tracer.h"
 
 namespace kdray {
 
@@ -22,5 +23,22 @@ std::vector<KdHit> trace_closest(const KdTree& tree, const Scene& scene,
 /// kd_render_pixel exactly as the OpenCL render kernel shades it.
 FrameResult render_reference(const KdTree& tree, const Scene& scene, const RenderInputs& inputs,
                              int threads = 0);
+
+/// render_reference behind the Tracer interface: the host tree, on `threads` threads (0: all).
+class ReferenceTracer final : public Tracer {
+  public:
+    explicit ReferenceTracer(int threads) : threads_(threads) {}
+
+    void prepare(const RenderInputs&) override {}
+    FrameResult trace(const BuiltTree& built, const Scene& scene,
+                      const RenderInputs& inputs) override {
+        return render_reference(built.tree, scene, inputs, threads_);
+    }
+    std::string name() const override { return "reference"; }
+    bool computes_on_host() const override { return true; }
+
+  private:
+    int threads_;
+};
 
 }  // namespace kdray

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -40,6 +41,11 @@ fs::path write_obj(const fs::path& path, const Scene& scene) {
     for (std::size_t t = 0; t < scene.triangle_count(); ++t)
         obj << "f " << 3 * t + 1 << ' ' << 3 * t + 2 << ' ' << 3 * t + 3 << '\n';
     return write_text_file(path, obj.str());
+}
+
+std::string read_file(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 nlohmann::json read_json(const fs::path& path) {
@@ -172,6 +178,43 @@ TEST_CASE("kdray render --frames and --shard pick frames by their number in the 
     CHECK(run_kdray({"render", (dir / "in" / "f_0.obj").string(), "-o", (dir / "x").string(),
                      "--frames", "a:b"})
               .status == 2);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("kdray render --warm-up renders the first frame through the run's pipeline, unwritten") {
+    // The warm-up is the run's own render_frame with nothing written: the files and the frames
+    // of stats.json are those of a run without it, and a bad first frame fails the warm-up with
+    // the frame's own error, before anything is written.
+    fs::path dir = fresh_temp_dir("cli-warm-up");
+    write_obj(dir / "in" / "f_0.obj", random_triangles(60, 15));
+    write_obj(dir / "in" / "f_1.obj", random_triangles(60, 16));
+    fs::path render = write_text_file(dir / "render.json", kSmallRender);
+    auto run = [&](const fs::path& out, const std::string& frames, bool warm_up) {
+        std::vector<std::string> args = {"render",   frames,          "-o", out.string(),
+                                         "--camera", render.string(), "-q"};
+        if (warm_up) args.push_back("--warm-up");
+        return run_kdray(args);
+    };
+    const std::string frames = (dir / "in" / "f_*.obj").string();
+    CommandResult cold = run(dir / "cold", frames, false);
+    REQUIRE_MESSAGE(cold.status == 0, cold.err);
+    CommandResult warm = run(dir / "warm", frames, true);
+    REQUIRE_MESSAGE(warm.status == 0, warm.err);
+    for (const char* image : {"f_0.png", "f_1.png"})
+        CHECK(read_file(dir / "warm" / image) == read_file(dir / "cold" / image));
+    std::size_t files = 0;
+    for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir / "warm")) ++files;
+    CHECK(files == 3);  // two images and stats.json
+    const nlohmann::json stats = read_json(dir / "warm" / "stats.json");
+    REQUIRE(stats["frames"].size() == 2);
+    CHECK(stats["frames"][0]["frame"] == 0);
+    CHECK(stats["summary"]["frame_numbers"] == nlohmann::json::array({0, 1}));
+
+    write_text_file(dir / "bad" / "f_0.obj", "v 0 0 0\nv 1 0 0\nv 0 1 inf\nf 1 2 3\n");
+    CommandResult bad = run(dir / "bad-out", (dir / "bad" / "f_0.obj").string(), true);
+    CHECK(bad.status == 1);
+    CHECK(bad.err.find("f_0.obj:3") != std::string::npos);
+    CHECK_FALSE(fs::exists(dir / "bad-out" / "stats.json"));
     fs::remove_all(dir);
 }
 

@@ -1,7 +1,7 @@
 // test_opencl_primitives.cpp — the device layer and the parallel primitives of
-// cl/runtime/kernels/primitives.cl checked against std:: on random inputs, at the sizes where chunked
-// scans go wrong: empty, one element, powers of two and one either side, and sizes that need
-// several recursion levels.
+// cl/runtime/kernels/primitives.cl checked against std:: on random inputs, at the sizes where
+// chunked scans go wrong: empty, one element, powers of two and one either side, and sizes that
+// need several recursion levels.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -15,6 +15,7 @@
 #include "cl/runtime/primitives.h"
 #include "cl/runtime/program_cache.h"
 #include "core/error.h"
+#include "core/kd_build_shared.h"
 #include "core/kd_shared.h"
 #include "tests/test_opencl_fixture.h"
 
@@ -105,10 +106,14 @@ TEST_CASE("opencl programs are built once and failures carry the log") {
 TEST_CASE("opencl layout: the device's sizeof of every shared struct equals the host's") {
     ClDevice& device = test::opencl_test_device();
     cl::Kernel kernel = make_kernel(cached_program(device, "layout.cl"), "kd_report_layout");
-    const std::vector<cl_uint> host = {sizeof(KdNode),      sizeof(KdRay),      sizeof(KdHit),
-                                       sizeof(KdMaterial),  sizeof(KdLight),    sizeof(KdView),
-                                       sizeof(KdRayCounts), sizeof(KdBuildNode)};
-    cl::Buffer out = device.allocate(16 * sizeof(cl_uint), "layout report");
+    const std::vector<cl_uint> host = {
+        sizeof(KdNode),           sizeof(KdRay),           sizeof(KdHit),
+        sizeof(KdMaterial),       sizeof(KdLight),         sizeof(KdView),
+        sizeof(KdRayCounts),      sizeof(KdBuildBox),      sizeof(KdBuildNode),
+        sizeof(KdSmallNode),      sizeof(KdLargeNode),     sizeof(KdLargeSplit),
+        sizeof(KdLargeCuts),      sizeof(KdSmallRoot),     sizeof(KdLargeSplitArgs),
+        sizeof(KdLargeLevelArgs), sizeof(KdSmallBatchArgs)};
+    cl::Buffer out = device.allocate((1 + host.size()) * sizeof(cl_uint), "layout report");
     kernel.setArg(0, out);
     device.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(1));
     const std::vector<cl_uint> dev = download<cl_uint>(device, out, 1 + host.size());

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cl/render/opencl_renderer.h"
+#include "cl/render/opencl_tracer.h"
 #include "cl/runtime/program_cache.h"
 #include "core/camera.h"
 #include "core/kd_render.h"
@@ -162,7 +163,7 @@ TEST_CASE("opencl render: a program is built once per effects combination") {
     CHECK(program_build_count() == builds);
 }
 
-TEST_CASE("opencl render: prepare_opencl_renderer builds the program that frames then reuse") {
+TEST_CASE("opencl render: the tracer's prepare builds the program that frames then reuse") {
     // Effects 3 (shadows and reflection) is a combination no other test renders, so the first
     // prepare must build it; the second prepare and the frame must not build again.
     Scene scene = test::random_triangles(50, 23);
@@ -178,12 +179,15 @@ TEST_CASE("opencl render: prepare_opencl_renderer builds the program that frames
     const RenderInputs inputs = prepare_render(scene, settings, skew_camera(scene), 0);
     REQUIRE(inputs.effects.bits() == (KDRAY_EFFECT_SHADOWS | KDRAY_EFFECT_REFLECTION));
 
+    OpenClTracer tracer(test::opencl_test_device());
     const int before = program_build_count();
-    prepare_opencl_renderer(test::opencl_test_device(), inputs);
+    tracer.prepare(inputs);
     CHECK(program_build_count() == before + 1);
-    prepare_opencl_renderer(test::opencl_test_device(), inputs);
-    const KdTree tree = build_reference(scene);
-    const FrameResult f = render_opencl(test::opencl_test_device(), tree, scene, inputs);
+    tracer.prepare(inputs);
+    BuiltTree built;
+    built.tree = build_reference(scene);
+    const KdTree& tree = built.tree;
+    const FrameResult f = tracer.trace(built, scene, inputs);
     CHECK(program_build_count() == before + 1);
     CHECK(f.rays.primary == 64u);
     // The prepared program renders what the reference renders.

@@ -49,24 +49,6 @@ bool use_packets(const ClDevice& device, kd_u32 intersect, RenderInputs::Packets
     return device.is_cpu();
 }
 
-/// The per-pixel kernel of a frame. kd_shade_traced_pixels when the packets traced its only
-/// primary ray and no ray follows from a hit but shadow rays: without the pending-ray stack and
-/// the primary walk, PoCL compiles it to half kd_render_pixels' time per pixel (BART Kitchen,
-/// 1024x768 headlight: 28 -> 15 ms).
-const char* pixel_kernel_name(const RenderInputs& inputs, bool packets) {
-    const bool one_ray_tree =
-        (inputs.effects.bits() & (KDRAY_EFFECT_REFLECTION | KDRAY_EFFECT_REFRACTION)) == 0u;
-    return packets && inputs.view.spp == 1u && one_ray_tree ? "kd_shade_traced_pixels"
-                                                            : "kd_render_pixels";
-}
-
-/// Whether the shadow rays from the packets' primary hits are traced as packets too
-/// (kd_trace_shadow_packets): with packets, shadows, and no more lights than a bit mask holds.
-bool use_shadow_packets(const RenderInputs& inputs, bool packets) {
-    return packets && (inputs.effects.bits() & KDRAY_EFFECT_SHADOWS) != 0u &&
-           inputs.view.light_count > 0u && inputs.view.light_count <= KDRAY_PACKET_SHADOW_LIGHTS;
-}
-
 /// Pixels of a work-group. Square tiles keep neighbouring rays, and their paths through the tree,
 /// together, which is what a GPU's SIMD lanes want. On PoCL (which runs a work-group as a loop
 /// over its work-items) the shape made no measurable difference: process CPU time per frame for
@@ -89,13 +71,6 @@ std::string render_options(const ClDevice& device, kd_u32 effects, kd_u32 inters
     return options;
 }
 
-/// The render program's kernel `name`.
-cl::Kernel render_kernel(const ClDevice& device, kd_u32 effects, kd_u32 intersect,
-                         const char* name) {
-    return make_kernel(
-        cached_program(device, "render.cl", render_options(device, effects, intersect)), name);
-}
-
 std::size_t round_up(std::size_t n, std::size_t multiple) {
     return (n + multiple - 1) / multiple * multiple;
 }
@@ -109,92 +84,122 @@ struct RenderBuffers {
     kd_u32 has_vertex_normals = 0;
 };
 
-/// Every argument of kd_render_pixels (render.cl) and of kd_trace_camera_packets, in their
-/// order; first_row and rows are set per launch (enqueue_rows, enqueue_packets).
-void set_pixel_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& view,
-                    kd_u32 outputs) {
-    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.material_ids, b.materials,
-                    b.lights, b.bounds, view, kd_u32(0), kd_u32(0), b.rgb, b.hits, b.normals,
-                    b.counts, b.traced, b.occluded, outputs, b.vertex_normals,
-                    b.has_vertex_normals);
-}
-void set_packet_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& view) {
-    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.bounds, view, kd_u32(0),
-                    kd_u32(0), b.traced);
-}
-void set_shadow_packet_args(cl::Kernel& kernel, const RenderBuffers& b, const KdView& view) {
-    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.bounds, view, kd_u32(0),
-                    kd_u32(0), b.lights, b.traced, b.occluded, b.vertex_normals,
-                    b.has_vertex_normals);
-}
+/// The image rows of one launch: `count` rows from `first`.
+struct LaunchRows {
+    std::size_t first = 0, count = 0;
+};
 
-/// The launch of `rows` image rows from `first_row`, in tiles.
-void enqueue_rows(ClDevice& device, cl::Kernel& kernel, std::size_t width, std::size_t first_row,
-                  std::size_t rows) {
-    kernel.setArg(8, kd_u32(first_row));
-    kernel.setArg(9, kd_u32(rows));
+// Each launch sets every argument of its kernel in the order of the kernel's signature in
+// render.cl, the per-launch rows among them: one list per kernel, no argument set by position.
+
+/// kd_render_pixels or kd_shade_traced_pixels (the same arguments) over `rows`, in tiles. A
+/// width of 0 (the warm-up's empty view) still launches one tile.
+void launch_pixels(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b, const KdView& view,
+                   LaunchRows rows, kd_u32 outputs) {
+    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.material_ids, b.materials,
+                    b.lights, b.bounds, view, kd_u32(rows.first), kd_u32(rows.count), b.rgb, b.hits,
+                    b.normals, b.counts, b.traced, b.occluded, outputs, b.vertex_normals,
+                    b.has_vertex_normals);
     device.queue().enqueueNDRangeKernel(
         kernel, cl::NullRange,
-        cl::NDRange(round_up(width, kTileWidth), round_up(rows, kTileHeight)),
+        cl::NDRange(round_up(std::max<std::size_t>(1, view.width), kTileWidth),
+                    round_up(rows.count, kTileHeight)),
         cl::NDRange(kTileWidth, kTileHeight));
 }
 
-/// The packet launch (kd_trace_camera_packets or kd_trace_shadow_packets, whose arguments 5 and 6
-/// are both first_row and rows) of `rows` image rows from `first_row`.
-void enqueue_packets(ClDevice& device, cl::Kernel& kernel, const KdView& view,
-                     std::size_t first_row, std::size_t rows) {
-    kernel.setArg(5, kd_u32(first_row));
-    kernel.setArg(6, kd_u32(rows));
+/// A packet kernel's launch over `rows`: a work-item per tile and primary ray of its pixels.
+void enqueue_packet_tiles(ClDevice& device, cl::Kernel& kernel, const KdView& view,
+                          LaunchRows rows) {
     // At least one tile: the warm-up's empty view would make a global size of 0, which OpenCL
     // 1.2 rejects (each work-item returns at once past the image).
     const std::size_t tiles_x =
         std::max<std::size_t>(1, (view.width + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE);
-    const std::size_t tiles_y = (rows + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
+    const std::size_t tiles_y = (rows.count + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
     device.queue().enqueueNDRangeKernel(
         kernel, cl::NullRange,
         cl::NDRange(round_up(tiles_x, kPacketGroup), tiles_y, kd_primary_rays_per_pixel(&view)),
         cl::NDRange(kPacketGroup, 1, 1));
 }
 
+/// kd_trace_camera_packets over `rows`.
+void launch_camera_packets(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
+                           const KdView& view, LaunchRows rows) {
+    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.bounds, view,
+                    kd_u32(rows.first), kd_u32(rows.count), b.traced);
+    enqueue_packet_tiles(device, kernel, view, rows);
+}
+
+/// kd_trace_shadow_packets over `rows`.
+void launch_shadow_packets(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
+                           const KdView& view, LaunchRows rows) {
+    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.bounds, view,
+                    kd_u32(rows.first), kd_u32(rows.count), b.lights, b.traced, b.occluded,
+                    b.vertex_normals, b.has_vertex_normals);
+    enqueue_packet_tiles(device, kernel, view, rows);
+}
+
+/// The launches of `rows`: the packets' primary hits and shadows first, then the pixels.
+void launch_rows(ClDevice& device, OpenClRenderPlan& plan, const RenderBuffers& b,
+                 const KdView& view, LaunchRows rows, kd_u32 outputs) {
+    if (plan.choice.packets) launch_camera_packets(device, plan.packet, b, view, rows);
+    if (plan.choice.shadow_packets) launch_shadow_packets(device, plan.shadow, b, view, rows);
+    launch_pixels(device, plan.pixel, b, view, rows, outputs);
+}
+
 }  // namespace
 
-void prepare_opencl_renderer(ClDevice& device, const RenderInputs& inputs) {
-    const kd_u32 effects = inputs.effects.bits(), intersect = inputs.intersect;
-    const bool packets = use_packets(device, intersect, inputs.packets);
-    cl::Kernel kernel =
-        render_kernel(device, effects, intersect, pixel_kernel_name(inputs, packets));
+OpenClRenderChoice choose_opencl_render(const ClDevice& device, const RenderInputs& inputs) {
+    OpenClRenderChoice choice;
+    choice.effects = inputs.effects.bits();
+    choice.intersect = inputs.intersect;
+    choice.packets = use_packets(device, inputs.intersect, inputs.packets);
+    // The shadow rays from the packets' primary hits are traced as packets too with shadows and
+    // no more lights than a bit mask holds.
+    choice.shadow_packets = choice.packets && (choice.effects & KDRAY_EFFECT_SHADOWS) != 0u &&
+                            inputs.view.light_count > 0u &&
+                            inputs.view.light_count <= KDRAY_PACKET_SHADOW_LIGHTS;
+    // kd_shade_traced_pixels when the packets traced the pixel's only primary ray and no ray
+    // follows from a hit but shadow rays: without the pending-ray stack and the primary walk,
+    // PoCL compiles it to half kd_render_pixels' time per pixel (BART Kitchen, 1024x768
+    // headlight: 28 -> 15 ms).
+    const bool one_ray_tree =
+        (choice.effects & (KDRAY_EFFECT_REFLECTION | KDRAY_EFFECT_REFRACTION)) == 0u;
+    choice.pixel_kernel = choice.packets && inputs.view.spp == 1u && one_ray_tree
+                              ? "kd_shade_traced_pixels"
+                              : "kd_render_pixels";
+    return choice;
+}
+
+OpenClRenderPlan plan_opencl_render(ClDevice& device, const OpenClRenderChoice& choice) {
+    const cl::Program program = cached_program(
+        device, "render.cl", render_options(device, choice.effects, choice.intersect));
+    OpenClRenderPlan plan;
+    plan.choice = choice;
+    plan.pixel = make_kernel(program, choice.pixel_kernel.c_str());
+    if (choice.packets) plan.packet = make_kernel(program, "kd_trace_camera_packets");
+    if (choice.shadow_packets) plan.shadow = make_kernel(program, "kd_trace_shadow_packets");
+    return plan;
+}
+
+void warm_up_opencl_render(ClDevice& device, OpenClRenderPlan& plan) {
     // One tile over an image of width 0: every work-item returns at once, but the device
-    // compiles the kernel for the tile size it will run with.
+    // compiles each kernel for the tile size it will run with.
     const KdView view{};
     with_cl_context("preparing the render kernel on " + device.info().name, [&] {
         const cl::Buffer dummy = device.allocate(sizeof(KdHit), "render kernel warm-up buffer");
         const RenderBuffers buffers{dummy, dummy, dummy, dummy, dummy, dummy, dummy,
                                     dummy, dummy, dummy, dummy, dummy, dummy, dummy};
-        set_pixel_args(kernel, buffers, view, 0);
-        enqueue_rows(device, kernel, 1, 0, 1);
-        if (packets) {
-            cl::Kernel packet =
-                render_kernel(device, effects, intersect, "kd_trace_camera_packets");
-            set_packet_args(packet, buffers, view);
-            enqueue_packets(device, packet, view, 0, 1);
-        }
-        if (use_shadow_packets(inputs, packets)) {
-            cl::Kernel shadow =
-                render_kernel(device, effects, intersect, "kd_trace_shadow_packets");
-            set_shadow_packet_args(shadow, buffers, view);
-            enqueue_packets(device, shadow, view, 0, 1);
-        }
+        launch_rows(device, plan, buffers, view, {0, 1}, 0);
         device.queue().finish();
     });
 }
 
-FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& scene,
-                          const RenderInputs& inputs, const DeviceTree* on_device) {
+FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree& tree,
+                          const Scene& scene, const RenderInputs& inputs,
+                          const DeviceTree* on_device) {
     const KdView& view = inputs.view;
     const std::size_t pixels = std::size_t(view.width) * view.height;
-    const bool packets = use_packets(device, inputs.intersect, inputs.packets);
-    cl::Kernel kernel = render_kernel(device, inputs.effects.bits(), inputs.intersect,
-                                      pixel_kernel_name(inputs, packets));
+    const bool packets = plan.choice.packets, shadow_packets = plan.choice.shadow_packets;
 
     const std::vector<float> bounds = {tree.bounds.lo.x, tree.bounds.lo.y, tree.bounds.lo.z,
                                        tree.bounds.hi.x, tree.bounds.hi.y, tree.bounds.hi.z};
@@ -228,31 +233,15 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
     b.traced = device.allocate(packets ? traced_rays * sizeof(KdHit) : sizeof(KdHit),
                                "primary hit buffer");
     // ... and, beside each, the lights its shadow rays find blocked.
-    const bool shadow_packets = use_shadow_packets(inputs, packets);
     b.occluded = device.allocate(shadow_packets ? traced_rays * sizeof(kd_u32) : sizeof(kd_u32),
                                  "shadow ray results");
-    cl::Kernel packet, shadow;
-    with_cl_context("rendering a frame on " + device.info().name, [&] {
-        if (packets) {
-            packet = render_kernel(device, inputs.effects.bits(), inputs.intersect,
-                                   "kd_trace_camera_packets");
-            set_packet_args(packet, b, view);
-        }
-        if (shadow_packets) {
-            shadow = render_kernel(device, inputs.effects.bits(), inputs.intersect,
-                                   "kd_trace_shadow_packets");
-            set_shadow_packet_args(shadow, b, view);
-        }
-        set_pixel_args(kernel, b, view,
-                       (packets ? KDRAY_RENDER_TRACED_PRIMARY : 0u) |
+    const kd_u32 outputs = (packets ? KDRAY_RENDER_TRACED_PRIMARY : 0u) |
                            (shadow_packets ? KDRAY_RENDER_TRACED_SHADOWS : 0u) |
-                           (inputs.normals ? KDRAY_RENDER_NORMALS : 0u));
-        for (std::size_t row = 0; row < view.height; row += step) {
-            const std::size_t rows = std::min<std::size_t>(step, view.height - row);
-            if (packets) enqueue_packets(device, packet, view, row, rows);
-            if (shadow_packets) enqueue_packets(device, shadow, view, row, rows);
-            enqueue_rows(device, kernel, view.width, row, rows);
-        }
+                           (inputs.normals ? KDRAY_RENDER_NORMALS : 0u);
+    with_cl_context("rendering a frame on " + device.info().name, [&] {
+        for (std::size_t row = 0; row < view.height; row += step)
+            launch_rows(device, plan, b, view,
+                        {row, std::min<std::size_t>(step, view.height - row)}, outputs);
     });
 
     FrameResult frame;
@@ -285,6 +274,12 @@ FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& sce
     else
         frame.rays.primary = std::uint64_t(pixels) * kd_primary_rays_per_pixel(&view);
     return frame;
+}
+
+FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& scene,
+                          const RenderInputs& inputs, const DeviceTree* on_device) {
+    OpenClRenderPlan plan = plan_opencl_render(device, choose_opencl_render(device, inputs));
+    return render_opencl(device, plan, tree, scene, inputs, on_device);
 }
 
 }  // namespace kdray

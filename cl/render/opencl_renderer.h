@@ -1,10 +1,17 @@
 // opencl_renderer.h — traces and shades a frame on the OpenCL device with the shared code of
 // core/kd_render.h: the same rays and the same arithmetic as the reference renderer, so the
-// reference image is this one's oracle.
+// reference image is this one's oracle. A frame runs the kernels of a plan, decided and created
+// once per combination of effects, triangle test and packets (cl/render/opencl_tracer.h keeps
+// them for a run).
 #pragma once
 
-#include "cl/runtime/device.h"
+#include <compare>
+#include <string>
+
+#include <CL/opencl.hpp>
+
 #include "cl/build/opencl_builder.h"
+#include "cl/runtime/device.h"
 #include "core/frame.h"
 #include "core/kd_tree.h"
 #include "core/render_setup.h"
@@ -12,18 +19,40 @@
 
 namespace kdray {
 
-/// Builds the render program of a frame with these inputs (its effects combination and triangle
-/// test) and runs the kernels such a frame runs once on an empty image, so that the program build
-/// and the device compiler's first-launch work (PoCL compiles a kernel per work-group size on its
-/// first launch) are done before the first frame is timed. Later calls, and frames with these
-/// effects, reuse what it built.
-void prepare_opencl_renderer(ClDevice& device, const RenderInputs& inputs);
+/// Which kernels frames with given inputs run on a device: the render program (effects and
+/// triangle test compiled in), whether packets trace the primary rays (kd_trace_camera_packets)
+/// and their shadow rays (kd_trace_shadow_packets), and the pixel kernel that shades.
+struct OpenClRenderChoice {
+    kd_u32 effects = 0, intersect = KDRAY_INTERSECT_WATERTIGHT;
+    bool packets = false, shadow_packets = false;
+    std::string pixel_kernel;  // kd_render_pixels or kd_shade_traced_pixels
 
-/// Renders one frame. The render program is built once per effects combination and triangle
-/// test (inputs.intersect) and reused. With packets (inputs.packets), kd_trace_camera_packets
-/// traces each launch's primary rays first and the pixel kernel shades from their hits.
+    auto operator<=>(const OpenClRenderChoice&) const = default;
+};
+OpenClRenderChoice choose_opencl_render(const ClDevice& device, const RenderInputs& inputs);
+
+/// A choice's kernels, created from its render program (built once per effects combination and
+/// triangle test by cl/runtime/program_cache); packet and shadow only where the choice uses them.
+struct OpenClRenderPlan {
+    OpenClRenderChoice choice;
+    cl::Kernel pixel, packet, shadow;
+};
+OpenClRenderPlan plan_opencl_render(ClDevice& device, const OpenClRenderChoice& choice);
+
+/// Runs each of the plan's kernels once on an empty image, so that the device compiler's
+/// first-launch work (PoCL compiles a kernel per work-group size on its first launch) is done
+/// before the first frame is timed.
+void warm_up_opencl_render(ClDevice& device, OpenClRenderPlan& plan);
+
+/// Renders one frame with a plan made for these inputs (choose_opencl_render(device, inputs)).
 /// `on_device`, when given, is `tree` and the scene's triangles as build_opencl left them on this
 /// device: they are traced where they lie instead of being uploaded again.
+FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree& tree,
+                          const Scene& scene, const RenderInputs& inputs,
+                          const DeviceTree* on_device = nullptr);
+
+/// One frame with a plan of its own (one-off frames, tests); the program cache still builds each
+/// program once.
 FrameResult render_opencl(ClDevice& device, const KdTree& tree, const Scene& scene,
                           const RenderInputs& inputs, const DeviceTree* on_device = nullptr);
 

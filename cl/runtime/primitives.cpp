@@ -12,17 +12,25 @@ std::string primitives_defines() {
     return "-DKDRAY_REDUCE_CHUNK=" + std::to_string(kReduceChunk) + "u";
 }
 
-ClPrimitives::ClPrimitives(ClDevice& device) : device_(device) {
-    const cl::Program program = cached_program(device, "primitives.cl", primitives_defines());
-    scan_chunks_ = make_kernel(program, "kd_scan_chunks");
-    scan_single_ = make_kernel(program, "kd_scan_single");
-    add_chunk_offsets_ = make_kernel(program, "kd_add_chunk_offsets");
-    add_offsets_by_chunk_ = make_kernel(program, "kd_add_chunk_offsets_by_chunk");
-    compact_by_flags_ = make_kernel(program, "kd_compact_by_flags");
-    reduce_box_chunks_ = make_kernel(program, "kd_reduce_box_chunks");
-    reduce_box_segments_ = make_kernel(program, "kd_reduce_box_segments");
-    count_box_chunks_ = make_kernel(program, "kd_count_box_chunks");
-}
+struct ClPrimitives::Kernels {
+    cl::Kernel scan_chunks, scan_single, add_chunk_offsets, add_offsets_by_chunk, compact_by_flags;
+    cl::Kernel reduce_box_chunks, reduce_box_segments, count_box_chunks;
+};
+
+ClPrimitives::ClPrimitives(ClDevice& device)
+    : device_(device), kernels_(cached_kernels<Kernels>(device, "", [&] {
+          const cl::Program program = cached_program(device, "primitives.cl", primitives_defines());
+          Kernels k;
+          k.scan_chunks = make_kernel(program, "kd_scan_chunks");
+          k.scan_single = make_kernel(program, "kd_scan_single");
+          k.add_chunk_offsets = make_kernel(program, "kd_add_chunk_offsets");
+          k.add_offsets_by_chunk = make_kernel(program, "kd_add_chunk_offsets_by_chunk");
+          k.compact_by_flags = make_kernel(program, "kd_compact_by_flags");
+          k.reduce_box_chunks = make_kernel(program, "kd_reduce_box_chunks");
+          k.reduce_box_segments = make_kernel(program, "kd_reduce_box_segments");
+          k.count_box_chunks = make_kernel(program, "kd_count_box_chunks");
+          return k;
+      })) {}
 
 void ClPrimitives::exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, std::size_t n) {
     cl::CommandQueue& queue = device_.queue();
@@ -31,23 +39,23 @@ void ClPrimitives::exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, s
     const std::size_t lanes = std::max<std::size_t>(1, device_.info().compute_units) * 256;
     const std::size_t chunk = std::max<std::size_t>(16, (n + lanes - 1) / lanes);
     if (n <= chunk) {
-        enqueue_kernel(queue, scan_single_, 1, in, out, cl_uint(n));
+        enqueue_kernel(queue, kernels_.scan_single, 1, in, out, cl_uint(n));
         return;
     }
     // Scan: chunk sums, then the scan of the sums (recursively), then add the chunk offsets.
     const std::size_t chunks = (n + chunk - 1) / chunk;
     cl::Buffer sums = device_.allocate((chunks + 1) * sizeof(cl_uint), "scan chunk sums");
-    enqueue_kernel(queue, scan_chunks_, chunks, in, out, cl_uint(n), cl_uint(chunk),
+    enqueue_kernel(queue, kernels_.scan_chunks, chunks, in, out, cl_uint(n), cl_uint(chunk),
                    cl_uint(chunks), sums);
     exclusive_scan(sums, sums, chunks);
     // On a CPU device one work-item per element costs more than the adding: by chunk, a 10^6
     // scan on PoCL (2 cores, bench_primitives, median of 7) went from 3.2 to 0.51 ms, 10^5 from
     // 0.38 to 0.09. GPUs keep one item per element, which coalesces.
     if (device_.is_cpu())
-        enqueue_kernel(queue, add_offsets_by_chunk_, chunks, out, cl_uint(n), cl_uint(chunk),
-                       cl_uint(chunks), sums);
+        enqueue_kernel(queue, kernels_.add_offsets_by_chunk, chunks, out, cl_uint(n),
+                       cl_uint(chunk), cl_uint(chunks), sums);
     else
-        enqueue_kernel(queue, add_chunk_offsets_, n, out, cl_uint(n), cl_uint(chunk),
+        enqueue_kernel(queue, kernels_.add_chunk_offsets, n, out, cl_uint(n), cl_uint(chunk),
                        cl_uint(chunks), sums);
 }
 
@@ -55,8 +63,8 @@ std::size_t ClPrimitives::compact(const cl::Buffer& values, const cl::Buffer& fl
                                   const cl::Buffer& out, std::size_t n) {
     cl::Buffer positions = device_.allocate((n + 1) * sizeof(cl_uint), "compaction positions");
     exclusive_scan(flags, positions, n);
-    enqueue_kernel(device_.queue(), compact_by_flags_, n, values, flags, positions, cl_uint(n),
-                   out);
+    enqueue_kernel(device_.queue(), kernels_.compact_by_flags, n, values, flags, positions,
+                   cl_uint(n), out);
     cl_uint count = 0;
     with_cl_context("reading the compacted count", [&] {
         device_.queue().enqueueReadBuffer(positions, CL_TRUE, n * sizeof(cl_uint), sizeof(count),
@@ -67,8 +75,8 @@ std::size_t ClPrimitives::compact(const cl::Buffer& values, const cl::Buffer& fl
 
 void ClPrimitives::box_chunk_starts(const cl::Buffer& seg_count, std::size_t segments,
                                     const cl::Buffer& chunk_start) {
-    enqueue_kernel(device_.queue(), count_box_chunks_, segments, seg_count, cl_uint(segments),
-                   chunk_start);
+    enqueue_kernel(device_.queue(), kernels_.count_box_chunks, segments, seg_count,
+                   cl_uint(segments), chunk_start);
     exclusive_scan(chunk_start, chunk_start, segments);
 }
 
@@ -76,10 +84,10 @@ void ClPrimitives::reduce_box_segments(const cl::Buffer& boxes, const cl::Buffer
                                        const cl::Buffer& seg_count, const cl::Buffer& chunk_start,
                                        std::size_t segments, std::size_t total_chunks,
                                        const cl::Buffer& chunk_boxes, const cl::Buffer& seg_boxes) {
-    enqueue_kernel(device_.queue(), reduce_box_chunks_, total_chunks, boxes, seg_start, seg_count,
-                   chunk_start, cl_uint(segments), cl_uint(total_chunks), chunk_boxes);
-    enqueue_kernel(device_.queue(), reduce_box_segments_, segments, chunk_boxes, chunk_start,
-                   cl_uint(segments), seg_boxes);
+    enqueue_kernel(device_.queue(), kernels_.reduce_box_chunks, total_chunks, boxes, seg_start,
+                   seg_count, chunk_start, cl_uint(segments), cl_uint(total_chunks), chunk_boxes);
+    enqueue_kernel(device_.queue(), kernels_.reduce_box_segments, segments, chunk_boxes,
+                   chunk_start, cl_uint(segments), seg_boxes);
 }
 
 }  // namespace kdray

@@ -1,7 +1,7 @@
-// primitives.h — data-parallel primitives on the device (cl/runtime/kernels/primitives.cl): exclusive scan,
-// stream compaction and segmented box reduction, the building blocks of Zhou et al.'s (2008)
-// kd-tree construction. All calls only enqueue work on the device's in-order queue, except where a
-// count must come back to the host (compact).
+// primitives.h — data-parallel primitives on the device (cl/runtime/kernels/primitives.cl):
+// exclusive scan, stream compaction and segmented box reduction, the building blocks of Zhou et
+// al.'s (2008) kd-tree construction. All calls only enqueue work on the device's in-order queue,
+// except where a count must come back to the host (compact).
 #pragma once
 
 #include <cstddef>
@@ -19,6 +19,7 @@ inline constexpr std::size_t kReduceChunk = 256;
 /// The -D options every program that uses the reduction's chunk size is built with.
 std::string primitives_defines();
 
+/// Cheap to construct: the program and its kernels are made once per device and kept.
 class ClPrimitives {
   public:
     explicit ClPrimitives(ClDevice& device);
@@ -46,10 +47,10 @@ class ClPrimitives {
                              const cl::Buffer& chunk_boxes, const cl::Buffer& seg_boxes);
 
   private:
+    struct Kernels;
     ClDevice& device_;
-    cl::Kernel scan_chunks_, scan_single_, add_chunk_offsets_, add_offsets_by_chunk_,
-        compact_by_flags_;
-    cl::Kernel reduce_box_chunks_, reduce_box_segments_, count_box_chunks_;
+    // Created once per device (cached_kernels), shared by every ClPrimitives of the device.
+    Kernels& kernels_;
 };
 
 }  // namespace kdray

@@ -56,6 +56,19 @@ cl::Kernel make_kernel(const cl::Program& program, const char* name) {
     return cl::Kernel(kernel);
 }
 
+std::shared_ptr<void> detail::cached_object(const ClDevice& device, const std::string& key,
+                                            const std::function<std::shared_ptr<void>()>& make) {
+    // Its own lock: make() builds programs, under cache_mutex.
+    static std::mutex objects_mutex;
+    static std::map<ProgramKey, std::shared_ptr<void>> objects;
+    ProgramKey object_key{device.context()(), device.device()(), key, ""};
+    std::lock_guard<std::mutex> lock(objects_mutex);
+    if (auto it = objects.find(object_key); it != objects.end()) return it->second;
+    std::shared_ptr<void> object = make();
+    objects.emplace(std::move(object_key), object);
+    return object;
+}
+
 int program_build_count() {
     std::lock_guard<std::mutex> lock(cache_mutex);
     return builds;

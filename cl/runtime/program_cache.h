@@ -5,8 +5,11 @@
 // across processes PoCL's own on-disk kernel cache (left enabled) skips the compile again.
 #pragma once
 
+#include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
+#include <typeinfo>
 
 #include <CL/opencl.hpp>
 
@@ -25,5 +28,23 @@ cl::Kernel make_kernel(const cl::Program& program, const char* name);
 
 /// How many programs the cache has built in this process (tests check that nothing is rebuilt).
 int program_build_count();
+
+namespace detail {
+std::shared_ptr<void> cached_object(const ClDevice& device, const std::string& key,
+                                    const std::function<std::shared_ptr<void>()>& make);
+}
+
+/// A set of kernels (a struct of cl::Kernel) that make() creates once per (context, device, type,
+/// key) and the process keeps: clCreateKernel for every kernel of every build cost each build
+/// its own kernel objects. A cl::Kernel carries its arguments and is not thread-safe, so a set
+/// serves one caller at a time; kdray's builds and renders run one after another on the device's
+/// one in-order queue. Creating a set is thread-safe.
+template <class Set, class Make>
+Set& cached_kernels(const ClDevice& device, const std::string& key, Make&& make) {
+    const std::string full_key = std::string(typeid(Set).name()) + "|" + key;
+    return *static_cast<Set*>(detail::cached_object(device, full_key, [&] {
+                                  return std::shared_ptr<void>(std::make_shared<Set>(make()));
+                              }).get());
+}
 
 }  // namespace kdray

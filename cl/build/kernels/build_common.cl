@@ -1,29 +1,20 @@
 /* build_common.cl — helpers the kd-tree build kernels share (included by build_large.cl,
  * build_small.cl and build_output.cl; it holds no kernel of its own).
  *
- * Boxes travel as 6 floats, lo.xyz hi.xyz; triangle references carry their box clipped to the
- * node that holds them, as in Zhou et al. (2008), §4.1 ("the bounding box of each triangle is
- * clipped to the node"). */
+ * Boxes travel as KDRAY_BOX_FLOATS floats, lo.xyz hi.xyz (KdBuildBox, core/kd_build_shared.h,
+ * where the builder's records and constants are defined); triangle references carry their box
+ * clipped to the node that holds them, as in Zhou et al. (2008), §4.1 ("the bounding box of each
+ * triangle is clipped to the node"). */
 #ifndef KDRAY_BUILD_COMMON_CL
 #define KDRAY_BUILD_COMMON_CL
 
 #include "core/kd_shared.h"
+#include "core/kd_build_shared.h"
 #include "core/kd_clip.h"
 
 /* Child bits of a reference: bit 0 = below (lower coordinates), bit 1 = above. */
 #define KDRAY_BELOW 1u
 #define KDRAY_ABOVE 2u
-
-/* KdBuildNode.axis of a small root: kd_build_small_subtrees writes its subtree, and leaf_first
- * is the small root's index. */
-#define KDRAY_SMALL_ROOT_AXIS 4u
-
-/* The small stage's node records (uint4 each), in preorder within their small root's subtree:
- *   x  bits 0-1: split axis, or KDRAY_LEAF_AXIS; bits 2-31: inner: the above child's index in the
- *      subtree; leaf: its first leaf reference, counted from the subtree's first
- *   y  inner: split position (float bits); leaf: triangle count
- *   z  leaf: mask bits 0-31 over the small root's references (bit i: its i-th triangle)
- *   w  leaf: mask bits 32-63 */
 
 typedef struct KdBox {
     float3 lo, hi;
@@ -39,7 +30,7 @@ inline float3 kd_with_axis(float3 v, uint axis, float x) {
 }
 
 inline KdBox kd_load_box(__global const float* boxes, size_t i) {
-    __global const float* b = boxes + i * 6;
+    __global const float* b = boxes + i * KDRAY_BOX_FLOATS;
     KdBox box;
     box.lo = (float3)(b[0], b[1], b[2]);
     box.hi = (float3)(b[3], b[4], b[5]);
@@ -47,9 +38,24 @@ inline KdBox kd_load_box(__global const float* boxes, size_t i) {
 }
 
 inline void kd_store_box(__global float* boxes, size_t i, KdBox box) {
-    __global float* b = boxes + i * 6;
+    __global float* b = boxes + i * KDRAY_BOX_FLOATS;
     b[0] = box.lo.x, b[1] = box.lo.y, b[2] = box.lo.z;
     b[3] = box.hi.x, b[4] = box.hi.y, b[5] = box.hi.z;
+}
+
+/* A box of a shared record (KdLargeNode, KdSmallRoot) as a KdBox, and back. */
+inline KdBox kd_box_of(KdBuildBox b) {
+    KdBox box;
+    box.lo = (float3)(b.lo[0], b.lo[1], b.lo[2]);
+    box.hi = (float3)(b.hi[0], b.hi[1], b.hi[2]);
+    return box;
+}
+
+inline KdBuildBox kd_build_box_of(KdBox box) {
+    KdBuildBox b;
+    b.lo[0] = box.lo.x, b.lo[1] = box.lo.y, b.lo[2] = box.lo.z;
+    b.hi[0] = box.hi.x, b.hi[1] = box.hi.y, b.hi[2] = box.hi.z;
+    return b;
 }
 
 inline float kd_box_area(KdBox b) {
@@ -175,8 +181,6 @@ inline KdBuildNode kd_build_leaf(uint count, uint first) {
     n.child[1] = 0;
     n.leaf_count = count;
     n.leaf_first = first;
-    n.mask_lo = 0;
-    n.mask_hi = 0;
     return n;
 }
 
@@ -195,8 +199,27 @@ inline KdBuildNode kd_build_inner(uint axis, float split, uint below, uint above
     n.child[1] = above;
     n.leaf_count = 0;
     n.leaf_first = 0;
+    return n;
+}
+
+/* Small-stage records (KdSmallNode): an inner node, whose above child's index its subtree's
+ * builder fills in later, and a leaf of `count` triangles, the set bits of `mask`, whose
+ * references start at `first` (counted from the subtree's first). */
+inline KdSmallNode kd_small_inner(uint axis, float split) {
+    KdSmallNode n;
+    n.axis_and_offset = axis;
+    n.split_or_count = as_uint(split);
     n.mask_lo = 0;
     n.mask_hi = 0;
+    return n;
+}
+
+inline KdSmallNode kd_small_leaf(uint first, uint count, ulong mask) {
+    KdSmallNode n;
+    n.axis_and_offset = KDRAY_LEAF_AXIS | (first << 2);
+    n.split_or_count = count;
+    n.mask_lo = (uint)mask;
+    n.mask_hi = (uint)(mask >> 32);
     return n;
 }
 

@@ -2,7 +2,7 @@
  * on graphics hardware" (ACM TOG 27(5), 2008): triangle bounding boxes, and the large-node stage
  * (§4.1), which processes every active large node of one tree level at once.
  *
- * One level, as the host chains it (cl/opencl_builder.cpp):
+ * One level, as the host chains it (cl/build/large_level.cpp):
  *   node bounds       segmented reduction of the nodes' reference boxes (primitives.cl)
  *   kd_bin_large_chunks        SAH bins of each reduction chunk (only with KDRAY_LARGE_BINS > 0)
  *   kd_split_large_nodes       empty-space cuts (a chain of them), then the binned SAH plane or
@@ -21,8 +21,8 @@
  * 260 bytes per reference and level, and the large stage was bound by memory.
  *
  * Slots: every node of the level owns two child slots (2i below, 2i+1 above), and the slot arrays
- * hold KDRAY_SLOT_KINDS segments of 2M values each (the host's SlotKind enum passes the segment
- * numbers as -D defines). One scan over all segments at once gives, for each slot and kind, its
+ * hold KDRAY_SLOT_KINDS segments of 2M values each (core/kd_build_shared.h numbers the kinds).
+ * One scan over all segments at once gives, for each slot and kind, its
  * rank: the index of a new large node, its first reference, ... A value is the difference of
  * neighbouring scanned entries, so the scans run in place. */
 #include "cl/build/kernels/build_common.cl"
@@ -50,14 +50,14 @@ __kernel void kd_compute_aabbs(__global const float* triangles, uint count,
 __kernel void kd_bin_large_chunks(__global const float* ref_box, __global const uint* node_start,
                                   __global const uint* node_count,
                                   __global const uint* node_chunk, uint nodes, uint chunks,
-                                  __global const float* node_box,
+                                  __global const KdLargeNode* node,
                                   __global const float* tight_box, __global uint* chunk_bins) {
     const uint c = get_global_id(0);
     if (c >= chunks) return;
     const uint i = kd_find_segment(node_chunk, nodes, c);
     const uint begin = node_start[i] + (c - node_chunk[i]) * KDRAY_REDUCE_CHUNK;
     const uint end = min(node_start[i] + node_count[i], begin + KDRAY_REDUCE_CHUNK);
-    const KdBox tight = kd_bin_box(node_box, tight_box, i);
+    const KdBox tight = kd_bin_box(kd_box_of(node[i].box), tight_box, i);
     const float4 extent = (float4)(tight.hi - tight.lo, 0.0f);
     const float4 scale =
         select((float4)(0.0f), (float)KDRAY_LARGE_BINS / extent, extent > (float4)(0.0f));
@@ -94,37 +94,32 @@ __kernel void kd_bin_large_chunks(__global const float* ref_box, __global const 
  * a level per cut gives, with fewer levels, i.e. fewer passes over the references: trees
  * byte-identical on kitchen, bunny, dragon_res2, sponza, bart-robots; large levels kitchen 34 ->
  * 29, bunny 19 -> 15; large_nodes stage (loaded 2-core PoCL, same sitting, median of 7 runs)
- * kitchen 174 -> 130 ms, bunny 70 -> 56 ms. node_box becomes the box of the chain's last node;
- * cut_code holds axis * 2 + (kept side is above). */
-__kernel void kd_split_large_nodes(uint nodes, __global float* node_box,
+ * kitchen 174 -> 130 ms, bunny 70 -> 56 ms. The node's box becomes the box of the chain's last
+ * node (KdLargeCuts gives the chain). */
+__kernel void kd_split_large_nodes(KdLargeSplitArgs a, __global KdLargeNode* node,
                                    __global const float* tight_box,
-                                   __global const uint* node_depth, uint max_depth,
-                                   uint force_leaf, float empty_ratio,
                                    __global const uint* node_chunk,
                                    __global const uint* node_count,
-                                   __global const uint* chunk_bins, float cost_traversal,
-                                   float cost_intersection, float empty_bonus,
-                                   __global uint* split_axis, __global float* split_pos,
-                                   __global uint* planar_sides, __global uint* cut_count,
-                                   __global uint* cut_code, __global float* cut_pos) {
+                                   __global const uint* chunk_bins, __global KdLargeSplit* split,
+                                   __global KdLargeCuts* chain) {
     const uint i = get_global_id(0);
-    if (i >= nodes) return;
-    cut_count[i] = 0;
-    if (force_leaf) {
-        split_axis[i] = KDRAY_LEAF_AXIS;
+    if (i >= a.nodes) return;
+    chain[i].count = 0;
+    if (a.force_leaf) {
+        split[i].axis = KDRAY_LEAF_AXIS;
         return;
     }
-    KdBox box = kd_load_box(node_box, i);
+    KdBox box = kd_box_of(node[i].box);
     KdBox tight = kd_load_box(tight_box, i);
     tight.lo = fmax(tight.lo, box.lo);
     tight.hi = fmin(tight.hi, box.hi);
-    const uint depth = node_depth[i];
+    const uint depth = node[i].depth, max_depth = a.max_depth;
     uint cuts = 0;
 
     /* Empty space cutting: the widest empty slab relative to the current box's extent. */
     while (cuts < KDRAY_MAX_CUTS && depth + cuts < max_depth) {
         const float3 extent = box.hi - box.lo;
-        float best = empty_ratio;
+        float best = a.empty_ratio;
         uint axis = KDRAY_LEAF_AXIS, keep_above = 0;
         float pos = 0.0f;
         for (uint a = 0; a < 3; ++a) {
@@ -136,13 +131,13 @@ __kernel void kd_split_large_nodes(uint nodes, __global float* node_box,
             if (gap_hi > best) best = gap_hi, axis = a, pos = kd_axis_of(tight.hi, a), keep_above = 0;
         }
         if (axis == KDRAY_LEAF_AXIS) break;
-        cut_code[KDRAY_MAX_CUTS * i + cuts] = axis * 2 + keep_above;
-        cut_pos[KDRAY_MAX_CUTS * i + cuts] = pos;
+        chain[i].code[cuts] = axis * 2 + keep_above;
+        chain[i].pos[cuts] = pos;
         box = kd_child_box(box, axis, pos, keep_above);
         ++cuts;
     }
-    cut_count[i] = cuts;
-    kd_store_box(node_box, i, box);
+    chain[i].count = cuts;
+    node[i].box = kd_build_box_of(box);
 
     /* Spatial median of the longest axis, or the binned SAH plane. A box flat in every axis
      * cannot be split. */
@@ -151,16 +146,17 @@ __kernel void kd_split_large_nodes(uint nodes, __global float* node_box,
     float lo = kd_axis_of(box.lo, axis), hi = kd_axis_of(box.hi, axis);
     float pos = 0.5f * (lo + hi);
 #if KDRAY_LARGE_BINS > 0
-    if (kd_best_large_split(box, tight, i, node_chunk, chunk_bins, node_count[i], cost_traversal,
-                            cost_intersection, empty_bonus, &axis, &pos)) {
+    if (kd_best_large_split(box, tight, i, node_chunk, chunk_bins, node_count[i], a.cost_traversal,
+                            a.cost_intersection, a.empty_bonus, &axis, &pos)) {
         lo = kd_axis_of(box.lo, axis);
         hi = kd_axis_of(box.hi, axis);
     }
 #endif
     if (!(pos > lo && pos < hi) || depth + cuts >= max_depth) axis = KDRAY_LEAF_AXIS;
-    split_axis[i] = axis;
-    split_pos[i] = pos;
-    planar_sides[i] = KDRAY_BELOW;
+    KdLargeSplit s;
+    s.axis = axis;
+    s.pos = pos;
+    split[i] = s;
 }
 
 /* Per reference of a chunk, the children it goes to (KDRAY_BELOW | KDRAY_ABOVE), and
@@ -182,7 +178,7 @@ KDRAY_HOT_INLINE uint2 kd_classify_references(uint begin, uint end, uint refs, c
                                               __global float* child_box) {
     uint below = 0, above = 0;
     for (uint r = begin; r < end; ++r) {
-        __global const float* box = ref_box + (size_t)r * 6;
+        __global const float* box = ref_box + (size_t)r * KDRAY_BOX_FLOATS;
         uint sides = kd_classify(box[axis], box[3 + axis], split, planar);
         if (sides == (KDRAY_BELOW | KDRAY_ABOVE)) {
             const KdBox b = kd_load_box(ref_box, r);
@@ -210,33 +206,34 @@ KDRAY_HOT_INLINE uint2 kd_classify_references(uint begin, uint end, uint refs, c
 
 /* Classify chunk c's references (a leaf node's get no sides): ref_sides[r] as above, and the
  * chunk's counts of references going below (chunk_counts[c]) and above (chunk_counts[chunks +
- * c]), scanned afterwards. A box on one side of the plane keeps it; a straddling one becomes the
- * bounds of the triangle's part in each child (§4.1, at worst the box cut at the plane), and a
- * triangle that lies on one side within the node after all (a diagonal sliver) enters that side
- * only. Clipping here, once, rather than again when distributing, halved the clipping work (10%
- * of a kitchen build). */
-__kernel void kd_classify_chunks(uint chunks, uint refs, uint nodes,
-                                 __global const uint* node_ref_start,
+ * c]), scanned afterwards. A reference lying flat in a large node's plane goes below (the
+ * planar_sides of kd_classify). A box on one side of the plane keeps it; a straddling one becomes
+ * the bounds of the triangle's part in each child (§4.1, at worst the box cut at the plane), and
+ * a triangle that lies on one side within the node after all (a diagonal sliver) enters that
+ * side only. Clipping here, once, rather than again when distributing, halved the clipping work
+ * (10% of a kitchen build). */
+__kernel void kd_classify_chunks(KdLargeLevelArgs a, __global const uint* node_ref_start,
                                  __global const uint* node_ref_count,
                                  __global const uint* node_chunk, __global const uint* ref_tri,
                                  __global const float* ref_box, __global const float* triangles,
-                                 __global const float* node_box, __global const uint* split_axis,
-                                 __global const float* split_pos,
-                                 __global const uint* planar_sides, __global uchar* ref_sides,
-                                 __global float* child_box, __global uint* chunk_counts) {
+                                 __global const KdLargeNode* large_node,
+                                 __global const KdLargeSplit* node_split,
+                                 __global uchar* ref_sides, __global float* child_box,
+                                 __global uint* chunk_counts) {
     const uint c = get_global_id(0);
+    const uint chunks = a.chunks, refs = a.refs;
     if (c >= chunks) return;
-    const uint i = kd_find_segment(node_chunk, nodes, c);
+    const uint i = kd_find_segment(node_chunk, a.nodes, c);
     const uint begin = node_ref_start[i] + (c - node_chunk[i]) * KDRAY_REDUCE_CHUNK;
     const uint end = min(node_ref_start[i] + node_ref_count[i], begin + KDRAY_REDUCE_CHUNK);
-    const uint axis = split_axis[i];
+    const uint axis = node_split[i].axis;
     uint2 counts = (uint2)(0, 0);
     if (axis == KDRAY_LEAF_AXIS) {
         for (uint r = begin; r < end; ++r) ref_sides[r] = 0;
     } else {
-        const float split = split_pos[i];
-        const uint planar = planar_sides[i];
-        const KdBox node = kd_load_box(node_box, i);
+        const float split = node_split[i].pos;
+        const uint planar = KDRAY_BELOW;
+        const KdBox node = kd_box_of(large_node[i].box);
         if (axis == 0)
             counts = kd_classify_references(begin, end, refs, 0, split, planar, node, ref_tri,
                                             ref_box, triangles, ref_sides, child_box);
@@ -264,12 +261,14 @@ inline uint kd_slot_rank(__global const uint* slot_rank, uint slots, uint k, uin
  * 1..T become small roots (§4.2), none an empty leaf. A split that separates nothing (both
  * children keep all references, e.g. a stack of coincident triangles) would recurse forever, so
  * the node becomes a leaf instead. */
-__kernel void kd_count_large_children(uint nodes, __global const uint* node_ref_count,
+__kernel void kd_count_large_children(KdLargeLevelArgs a, __global const uint* node_ref_count,
                                       __global const uint* node_chunk,
-                                      __global uint* split_axis, __global const uint* cut_count,
-                                      __global const uint* chunk_rank, uint chunks,
-                                      uint large_threshold, __global uint* slot_values) {
+                                      __global KdLargeSplit* split,
+                                      __global const KdLargeCuts* chain,
+                                      __global const uint* chunk_rank,
+                                      __global uint* slot_values) {
     const uint i = get_global_id(0);
+    const uint nodes = a.nodes, chunks = a.chunks;
     if (i >= nodes) return;
     const uint slots = 2 * nodes;
     for (uint k = 0; k < KDRAY_SLOT_KINDS; ++k) {
@@ -278,19 +277,19 @@ __kernel void kd_count_large_children(uint nodes, __global const uint* node_ref_
     }
     const uint count = node_ref_count[i];
     const uint first = node_chunk[i], last = node_chunk[i + 1];
-    uint axis = split_axis[i];
+    uint axis = split[i].axis;
     uint n[2] = {0, 0};
     if (axis != KDRAY_LEAF_AXIS) {
         n[0] = chunk_rank[last] - chunk_rank[first];
         n[1] = chunk_rank[chunks + last] - chunk_rank[chunks + first];
         if (n[0] == count && n[1] == count) {
             axis = KDRAY_LEAF_AXIS;
-            split_axis[i] = axis;
+            split[i].axis = axis;
         }
     }
     /* Generation g of the node's new nodes: the pair of the chain's g-th cut, then the pair of
      * the median split (kd_split_large_nodes). */
-    const uint cuts = cut_count[i];
+    const uint cuts = chain[i].count;
     for (uint g = 0; g < cuts; ++g) slot_values[(KDRAY_SLOT_CHILD + g) * slots + 2 * i] = 2;
     if (axis == KDRAY_LEAF_AXIS) {
         slot_values[KDRAY_SLOT_LEAF_REFS * slots + 2 * i] = count;
@@ -299,7 +298,7 @@ __kernel void kd_count_large_children(uint nodes, __global const uint* node_ref_
     slot_values[(KDRAY_SLOT_CHILD + cuts) * slots + 2 * i] = 2;
     for (uint side = 0; side < 2; ++side) {
         const uint s = 2 * i + side;
-        if (n[side] > large_threshold) {
+        if (n[side] > a.large_threshold) {
             slot_values[KDRAY_SLOT_LARGE * slots + s] = 1;
             slot_values[KDRAY_SLOT_LARGE_REFS * slots + s] = n[side];
             slot_values[KDRAY_SLOT_LARGE_CHUNKS * slots + s] =
@@ -312,20 +311,19 @@ __kernel void kd_count_large_children(uint nodes, __global const uint* node_ref_
 }
 
 /* Write this level's node records and create its children: the next level's large nodes, new
- * small roots (appended to the small stage's first level) and empty leaves. Bases are where this
- * level's new node ids, small roots, small references and leaf references start. */
-__kernel void kd_emit_large_children(
-    uint nodes, __global const float* node_box, __global const uint* node_ref_count,
-    __global const uint* node_id, __global const uint* split_axis,
-    __global const float* split_pos, __global const uint* cut_count,
-    __global const uint* cut_code, __global const float* cut_pos, __global const uint* node_depth,
-    __global const uint* slot_rank, uint node_base, uint small_root_base, uint small_ref_base,
-    uint leaf_ref_base, __global KdBuildNode* records, __global float* next_box,
-    __global uint* next_ref_start, __global uint* next_ref_count, __global uint* next_chunk_start,
-    __global uint* next_node_id, __global uint* next_depth, __global uint* root_ref_start,
-    __global uint* root_ref_count, __global float* small_box, __global uint* small_node_id,
-    __global uint* small_depth) {
+ * small roots (appended to the small stage's roots) and empty leaves. The bases in `a` are where
+ * this level's new node ids, small roots, small references and leaf references start. */
+__kernel void kd_emit_large_children(KdLargeLevelArgs a, __global const KdLargeNode* node,
+                                     __global const uint* node_ref_count,
+                                     __global const KdLargeSplit* node_split,
+                                     __global const KdLargeCuts* chain,
+                                     __global const uint* slot_rank, __global KdBuildNode* records,
+                                     __global KdLargeNode* next_node,
+                                     __global uint* next_ref_start, __global uint* next_ref_count,
+                                     __global uint* next_chunk_start,
+                                     __global KdSmallRoot* small_roots) {
     const uint i = get_global_id(0);
+    const uint nodes = a.nodes;
     if (i >= nodes) return;
     const uint slots = 2 * nodes;
     if (i == 0) {
@@ -337,32 +335,33 @@ __kernel void kd_emit_large_children(
     /* New ids come by generation (all first pairs, then all second pairs, ...), so that every
      * child's id lies in a later batch than its parent's (build_output.cl). */
     uint generation_base[KDRAY_MAX_CUTS + 1];
-    for (uint g = 0, base = node_base; g <= KDRAY_MAX_CUTS; ++g) {
+    for (uint g = 0, base = a.node_base; g <= KDRAY_MAX_CUTS; ++g) {
         generation_base[g] = base;
         base += kd_slot_rank(slot_rank, slots, KDRAY_SLOT_CHILD + g, slots);
     }
     /* The chain of empty-space cuts: each node's empty side is an empty leaf. */
-    const uint cuts = cut_count[i];
-    uint self = node_id[i];
+    const uint cuts = chain[i].count;
+    const KdLargeNode parent = node[i];
+    uint self = parent.id;
     for (uint g = 0; g < cuts; ++g) {
         const uint id =
             generation_base[g] + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_CHILD + g, 2 * i);
-        const uint code = cut_code[KDRAY_MAX_CUTS * i + g], keep_above = code & 1u;
+        const uint code = chain[i].code[g], keep_above = code & 1u;
         records[id] = kd_build_leaf(0, 0);
-        records[self] = kd_build_inner(code >> 1, cut_pos[KDRAY_MAX_CUTS * i + g],
-                                       keep_above ? id : id + 1, keep_above ? id + 1 : id);
+        records[self] = kd_build_inner(code >> 1, chain[i].pos[g], keep_above ? id : id + 1,
+                                       keep_above ? id + 1 : id);
         self = id + 1;
     }
-    const uint axis = split_axis[i];
+    const uint axis = node_split[i].axis;
     if (axis == KDRAY_LEAF_AXIS) {
         records[self] = kd_build_leaf(
             node_ref_count[i],
-            leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i));
+            a.leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i));
         return;
     }
-    const uint child_depth = node_depth[i] + cuts + 1;
-    const float split = split_pos[i];
-    const KdBox box = kd_load_box(node_box, i);
+    const uint child_depth = parent.depth + cuts + 1;
+    const float split = node_split[i].pos;
+    const KdBox box = kd_box_of(parent.box);
     const uint first_child =
         generation_base[cuts] + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_CHILD + cuts, 2 * i);
     uint child_id[2];
@@ -373,21 +372,24 @@ __kernel void kd_emit_large_children(
         const KdBox child = kd_child_box(box, axis, split, side);
         if (kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s)) {
             const uint j = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE, s);
-            kd_store_box(next_box, j, child);
+            KdLargeNode large;
+            large.box = kd_build_box_of(child);
+            large.id = id;
+            large.depth = child_depth;
+            next_node[j] = large;
             next_ref_start[j] = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s);
             next_ref_count[j] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s);
             next_chunk_start[j] = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_CHUNKS, s);
-            next_node_id[j] = id;
-            next_depth[j] = child_depth;
         } else if (kd_slot_value(slot_rank, slots, KDRAY_SLOT_SMALL, s)) {
-            const uint q = small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
-            const uint n = kd_slot_value(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s);
-            root_ref_start[q] =
-                small_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s);
-            root_ref_count[q] = n;
-            kd_store_box(small_box, q, child);
-            small_node_id[q] = id;
-            small_depth[q] = child_depth;
+            const uint q = a.small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
+            KdSmallRoot root;
+            root.box = kd_build_box_of(child);
+            root.ref_start =
+                a.small_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s);
+            root.ref_count = kd_slot_value(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s);
+            root.node_id = id;
+            root.depth = child_depth;
+            small_roots[q] = root;
             records[id] = kd_build_small_root(q);
         } else {
             records[id] = kd_build_leaf(0, 0);
@@ -401,25 +403,25 @@ __kernel void kd_emit_large_children(
  * in reference order: a reference's rank in its child is the chunk's scanned count plus those
  * before it in the chunk. */
 __kernel void kd_distribute_chunks(
-    uint chunks, uint refs, uint nodes, __global const uint* node_ref_start,
-    __global const uint* node_ref_count, __global const uint* node_chunk,
-    __global const uint* ref_tri, __global const float* ref_box,
+    KdLargeLevelArgs a, __global const uint* node_ref_start, __global const uint* node_ref_count,
+    __global const uint* node_chunk, __global const uint* ref_tri, __global const float* ref_box,
     __global const uchar* ref_sides, __global const float* child_box,
-    __global const uint* split_axis, __global const uint* chunk_rank,
-    __global const uint* slot_rank, uint small_root_base, uint small_ref_base,
-    uint leaf_ref_base, __global uint* next_ref_tri, __global float* next_ref_box,
+    __global const KdLargeSplit* split, __global const uint* chunk_rank,
+    __global const uint* slot_rank, __global uint* next_ref_tri, __global float* next_ref_box,
     __global uint* small_ref_tri, __global float* small_ref_box, __global uint* small_ref_root,
     __global uint* leaf_refs) {
     const uint c = get_global_id(0);
+    const uint chunks = a.chunks, refs = a.refs, nodes = a.nodes;
+    const uint small_root_base = a.small_root_base, small_ref_base = a.small_ref_base;
     if (c >= chunks) return;
     const uint slots = 2 * nodes;
     const uint i = kd_find_segment(node_chunk, nodes, c);
     const uint start = node_ref_start[i];
     const uint begin = start + (c - node_chunk[i]) * KDRAY_REDUCE_CHUNK;
     const uint end = min(start + node_ref_count[i], begin + KDRAY_REDUCE_CHUNK);
-    if (split_axis[i] == KDRAY_LEAF_AXIS) {
+    if (split[i].axis == KDRAY_LEAF_AXIS) {
         const uint first =
-            leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i) - start;
+            a.leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i) - start;
         for (uint r = begin; r < end; ++r) leaf_refs[first + r] = ref_tri[r];
         return;
     }

@@ -18,7 +18,7 @@
 
 #include "cl/build/kernels/build_common.cl"
 
-#define KDRAY_BIN_VALUES (6 * KDRAY_LARGE_BINS)
+#define KDRAY_BIN_VALUES (KDRAY_BIN_COUNTS * KDRAY_LARGE_BINS)
 
 /* Bins of a reference's lo and hi on the three axes (lane 3 unused) of a tight box starting at
  * lo, with bins / extent in scale. A value exactly on a bin boundary b lies on the plane between
@@ -36,8 +36,7 @@ inline void kd_large_bins(KdBox b, float4 lo, float4 scale, uint4* lo_bin, uint4
 }
 
 /* The tight box a node's bins divide: its references' bounds within the node's box. */
-inline KdBox kd_bin_box(__global const float* node_box, __global const float* tight_box, uint i) {
-    const KdBox box = kd_load_box(node_box, i);
+inline KdBox kd_bin_box(KdBox box, __global const float* tight_box, uint i) {
     KdBox tight = kd_load_box(tight_box, i);
     tight.lo = fmax(tight.lo, box.lo);
     tight.hi = fmin(tight.hi, box.hi);

@@ -66,37 +66,40 @@ __kernel void kd_write_nodes(uint count, __global const KdBuildNode* records,
     for (uint k = 0; k < n.leaf_count; ++k) leaf_indices[first + k] = leaf_store[n.leaf_first + k];
 }
 
-/* A small root's subtree (kd_build_small_subtrees, records described in build_common.cl) lies in
+/* A small root's subtree (kd_build_small_subtrees, KdSmallNode records) lies in
  * preorder from the root's position on: its child indices and leaf offsets only shift by where
  * the root and its first leaf reference landed. A leaf's mask names its small root's triangles.
- * One launch per batch of small roots (roots root_begin.., references ref_begin..), whose
- * records are laid out as kd_build_small_subtrees wrote them; subtrees that outgrew the first
- * pass's records (first_scale per reference) are the second's, from second_offset on. */
+ * One launch per batch of small roots (a.roots roots from a.root_begin, references from
+ * a.ref_begin), whose records are laid out as kd_build_small_subtrees wrote them; subtrees that
+ * outgrew the first pass's records (a.first_scale per reference) are the second's, from
+ * second_offset on. */
 __kernel void kd_write_small_subtrees(
-    uint root_begin, uint roots, uint ref_begin, __global const uint* root_node_id,
-    __global const uint* root_ref_start, __global const uint* root_ref_count, uint first_scale,
-    __global const uint4* first_nodes, __global const uint4* second_nodes,
+    KdSmallBatchArgs a, __global const KdSmallRoot* small_roots,
+    __global const KdSmallNode* first_nodes, __global const KdSmallNode* second_nodes,
     __global const uint* second_offset, __global const uint* subtree_node_count,
     __global const uint* position, __global const uint* leaf_position,
     __global const uint* small_ref_tri, __global KdNode* nodes, __global uint* leaf_indices) {
-    if (get_global_id(0) >= roots) return;
+    if (get_global_id(0) >= a.roots) return;
+    const uint root_begin = a.root_begin, first_scale = a.first_scale;
     const uint q = root_begin + (uint)get_global_id(0);
-    const uint start = root_ref_start[q], count = subtree_node_count[q];
-    const size_t units = (start - ref_begin) + (q - root_begin);
-    __global const uint4* in = count <= first_scale * (root_ref_count[q] + 1)
-                                   ? first_nodes + (size_t)first_scale * units
-                                   : second_nodes + second_offset[q - root_begin];
-    const uint at = position[root_node_id[q]], first = leaf_position[root_node_id[q]];
+    const KdSmallRoot root = small_roots[q];
+    const uint start = root.ref_start, count = subtree_node_count[q];
+    const size_t units = (start - a.ref_begin) + (q - root_begin);
+    __global const KdSmallNode* in = count <= first_scale * (root.ref_count + 1)
+                                         ? first_nodes + (size_t)first_scale * units
+                                         : second_nodes + second_offset[q - root_begin];
+    const uint at = position[root.node_id], first = leaf_position[root.node_id];
     for (uint j = 0; j < count; ++j) {
-        const uint4 r = in[j];
-        const uint axis = r.x & 3u, offset = r.x >> 2;
+        const KdSmallNode r = in[j];
+        const uint axis = r.axis_and_offset & 3u, offset = r.axis_and_offset >> 2;
         if (axis != KDRAY_LEAF_AXIS) {
-            nodes[at + j] = kd_make_inner(axis, as_float(r.y), at + offset);
+            nodes[at + j] = kd_make_inner(axis, as_float(r.split_or_count), at + offset);
             continue;
         }
-        nodes[at + j] = kd_make_leaf(r.y, first + offset);
+        nodes[at + j] = kd_make_leaf(r.split_or_count, first + offset);
         uint out = first + offset;
-        for (ulong rest = ((ulong)r.w << 32) | (ulong)r.z; rest != 0; rest &= rest - 1) {
+        for (ulong rest = ((ulong)r.mask_hi << 32) | (ulong)r.mask_lo; rest != 0;
+             rest &= rest - 1) {
             leaf_indices[out++] = small_ref_tri[start + kd_lowest_bit(rest)];
         }
     }

@@ -17,9 +17,9 @@
  *
  * Candidates are the boundaries of the root's (clipped) triangle boxes, or of a re-clipped node's
  * (KdClippedTable): candidate 6*ref + 2*axis + side lies at the box's lo (side 0) or hi (side 1)
- * on that axis. side_masks holds 16 masks per reference, [16 ref + k] the triangles below its
- * candidate k and [16 ref + 8 + k] those above (k < 6; two lanes of padding each), so that the
- * kernels read a reference's masks as two ulong8.
+ * on that axis. side_masks holds KDRAY_MASK_WORDS_PER_REF (16) masks per reference, [16 ref + k]
+ * the triangles below its candidate k and [16 ref + 8 + k] those above (k < 6; two lanes of
+ * padding each), so that the kernels read a reference's masks as two ulong8.
  *
  * Both kernels run over one batch of small roots at a time: roots root_begin.., whose references
  * are ref_begin.. (contiguous, as the large stage lays them out). side_masks and the node records
@@ -48,15 +48,14 @@
  * scalar loop over the root took 86 ms of CPU per kitchen build (perf); this one 24 ms. */
 __kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const float* ref_box,
                                      __global const uint* ref_root,
-                                     __global const uint* root_ref_start,
-                                     __global const uint* root_ref_count,
+                                     __global const KdSmallRoot* small_roots,
                                      __global ulong* side_masks) {
     if (get_global_id(0) >= refs) return;
     const uint ref = ref_begin + (uint)get_global_id(0);
-    const float8 pos = kd_candidate_lanes(ref_box + (size_t)ref * 6);
+    const float8 pos = kd_candidate_lanes(ref_box + (size_t)ref * KDRAY_BOX_FLOATS);
     const int8 planar_above = kd_planar_above_lanes(pos);
     const uint root = ref_root[ref];
-    const uint start = root_ref_start[root], count = root_ref_count[root];
+    const uint start = small_roots[root].ref_start, count = small_roots[root].ref_count;
     /* The masks' low and high 32 bits, each in 32-bit lanes (half the vector width of 64-bit
      * lanes), in registers: one loop per half. */
     uint8 below_half[2], above_half[2];
@@ -77,8 +76,8 @@ __kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const f
     }
     const ulong8 below = convert_ulong8(below_half[0]) | (convert_ulong8(below_half[1]) << 32);
     const ulong8 above = convert_ulong8(above_half[0]) | (convert_ulong8(above_half[1]) << 32);
-    vstore8(below, 0, side_masks + (size_t)(ref - ref_begin) * 16);
-    vstore8(above, 1, side_masks + (size_t)(ref - ref_begin) * 16);
+    vstore8(below, 0, side_masks + (size_t)(ref - ref_begin) * KDRAY_MASK_WORDS_PER_REF);
+    vstore8(above, 1, side_masks + (size_t)(ref - ref_begin) * KDRAY_MASK_WORDS_PER_REF);
 }
 
 /* The masks carry boxes clipped to the small root (or to a re-clipping ancestor), not to the node,
@@ -116,9 +115,9 @@ typedef struct KdPendingNode {
 
 /* Small-node stage (§4.2), one work-item per small root: split the root's subtree depth first,
  * writing its nodes in preorder (below child right after its parent, above child after the below
- * subtree, as the output layout wants) to the root's run of subtree_nodes (the record layout is
- * in build_common.cl; leaf offsets count from the subtree's first leaf reference). A node becomes
- * a leaf when no split beats C_i N, at the depth limit, or when its box has no area.
+ * subtree, as the output layout wants) to the root's run of subtree_nodes (KdSmallNode records,
+ * core/kd_build_shared.h; leaf offsets count from the subtree's first leaf reference). A node
+ * becomes a leaf when no split beats C_i N, at the depth limit, or when its box has no area.
  *
  * The first pass gives a root of count references first_scale * (count + 1) records, from
  * first_scale * (the batch's references and roots before it) on. Outputs per root: its node and
@@ -126,33 +125,36 @@ typedef struct KdPendingNode {
  * totals (zeroed by the host): [0] the stage's node count, [1] the smallest scale that holds
  * every subtree, [2] the most levels of one subtree. The second pass (second_pass != 0) builds
  * again only the subtrees that outgrew the first, each into exactly its counted records from
- * second_offset[root - root_begin] on (kd_second_pass_records). */
+ * second_offset[root - root_begin] on (kd_second_pass_records). The batch and the SAH costs come
+ * in `a`. */
 __kernel void kd_build_small_subtrees(
-    uint root_begin, uint roots, uint ref_begin, __global const float* root_box,
-    __global const uint* root_depth, __global const uint* root_ref_start,
-    __global const uint* root_ref_count, __global const float* ref_box,
+    KdSmallBatchArgs a, __global const KdSmallRoot* small_roots, __global const float* ref_box,
     __global const ulong* side_masks, __global const uint* ref_tri, __global const float* triangles,
-    float cost_traversal, float cost_intersection, float empty_bonus, uint max_depth,
-    uint first_scale, uint second_pass, __global const uint* second_offset,
-    __global uint4* subtree_nodes, __global uint* subtree_node_count,
-    __global uint* subtree_leaf_refs, __global uint* totals) {
-    if (get_global_id(0) >= roots) return;
+    __global const uint* second_offset, __global KdSmallNode* subtree_nodes,
+    __global uint* subtree_node_count, __global uint* subtree_leaf_refs, __global uint* totals) {
+    const uint root_begin = a.root_begin, ref_begin = a.ref_begin, first_scale = a.first_scale;
+    const uint second_pass = a.second_pass, max_depth = a.max_depth;
+    const float cost_traversal = a.cost_traversal, cost_intersection = a.cost_intersection;
+    const float empty_bonus = a.empty_bonus;
+    if (get_global_id(0) >= a.roots) return;
     const uint q = root_begin + (uint)get_global_id(0);
-    const uint start = root_ref_start[q], count = root_ref_count[q];
+    const KdSmallRoot root = small_roots[q];
+    const uint start = root.ref_start, count = root.ref_count;
     const uint first_budget = first_scale * (count + 1);
     if (second_pass && subtree_node_count[q] <= first_budget) return;
     const uint budget = second_pass ? subtree_node_count[q] : first_budget;
-    __global uint4* out =
+    __global KdSmallNode* out =
         second_pass
             ? subtree_nodes + second_offset[q - root_begin]
             : subtree_nodes + (size_t)first_scale * ((start - ref_begin) + (q - root_begin));
-    __global const ulong* root_masks = side_masks + (size_t)(start - ref_begin) * 16;
+    __global const ulong* root_masks =
+        side_masks + (size_t)(start - ref_begin) * KDRAY_MASK_WORDS_PER_REF;
     KdPendingNode stack[KDRAY_MAX_DEPTH];
     uint top = 0;
     KdPendingNode node;
-    node.box = kd_load_box(root_box, q);
+    node.box = kd_box_of(root.box);
     node.mask = count >= 64 ? ~0ul : ((1ul << count) - 1ul);
-    node.depth = root_depth[q];
+    node.depth = root.depth;
     node.parent = KDRAY_NO_CANDIDATE;
     node.on_table = 0;
     KdClippedTable table;
@@ -162,7 +164,7 @@ __kernel void kd_build_small_subtrees(
         const uint at = written++;
         deepest = max(deepest, node.depth);
         if (node.parent != KDRAY_NO_CANDIDATE && node.parent < budget)
-            out[node.parent].x = node.parent_axis | (at << 2);
+            out[node.parent].axis_and_offset = node.parent_axis | (at << 2);
         uint best = KDRAY_NO_CANDIDATE;
         if (node.mask != 0 && node.depth < max_depth && kd_box_area(node.box) > 0.0f) {
             if (!node.on_table && popcount(node.mask) <= KDRAY_RECLIP_REFS)
@@ -179,9 +181,7 @@ __kernel void kd_build_small_subtrees(
             /* Leaf: its triangles are the mask's, its references the next in preorder. */
             const ulong leaf_mask = node.on_table ? kd_root_mask(&table, node.mask) : node.mask;
             const uint n = popcount(leaf_mask);
-            if (at < budget)
-                out[at] = (uint4)(KDRAY_LEAF_AXIS | (leaf_refs << 2), n, (uint)leaf_mask,
-                                  (uint)(leaf_mask >> 32));
+            if (at < budget) out[at] = kd_small_leaf(leaf_refs, n, leaf_mask);
             leaf_refs += n;
             if (top == 0) break;
             node = stack[--top];
@@ -194,12 +194,13 @@ __kernel void kd_build_small_subtrees(
         const KdClippedTable* node_table = 0;
         if (node.on_table) {
             pos = vload8(ref, table.candidates);
-            below = convert_ulong8(vload8(0, table.masks + ref * 16));
-            above = convert_ulong8(vload8(1, table.masks + ref * 16));
+            below = convert_ulong8(vload8(0, table.masks + ref * KDRAY_MASK_WORDS_PER_REF));
+            above = convert_ulong8(vload8(1, table.masks + ref * KDRAY_MASK_WORDS_PER_REF));
             node_table = &table;
         } else {
-            __global const ulong* masks = root_masks + (size_t)(ref - start) * 16;
-            pos = kd_candidate_lanes(ref_box + (size_t)ref * 6);
+            __global const ulong* masks =
+                root_masks + (size_t)(ref - start) * KDRAY_MASK_WORDS_PER_REF;
+            pos = kd_candidate_lanes(ref_box + (size_t)ref * KDRAY_BOX_FLOATS);
             below = vload8(0, masks);
             above = vload8(1, masks);
         }
@@ -218,7 +219,7 @@ __kernel void kd_build_small_subtrees(
         }
         kd_drop_missed_triangles(&children[0][k], &children[1][k], node.box, axis, split, start,
                                  node_table, ref_tri, triangles);
-        if (at < budget) out[at] = (uint4)(axis, as_uint(split), 0, 0);
+        if (at < budget) out[at] = kd_small_inner(axis, split);
         KdPendingNode pending;
         pending.box = kd_child_box(node.box, axis, split, 1);
         pending.mask = children[1][k];
@@ -236,18 +237,17 @@ __kernel void kd_build_small_subtrees(
     subtree_leaf_refs[q] = leaf_refs;
     atomic_add(&totals[0], written);
     atomic_max(&totals[1], (written + count) / (count + 1));
-    atomic_max(&totals[2], deepest - root_depth[q] + 1);
+    atomic_max(&totals[2], deepest - root.depth + 1);
 }
 
-/* The second pass's records of a batch's roots (roots root_begin..): records[g] the node count of
- * root root_begin + g when its subtree outgrew the first pass's first_scale * (count + 1), else
- * 0; their exclusive scan places each subtree (kd_build_small_subtrees). */
-__kernel void kd_second_pass_records(uint root_begin, uint roots, uint first_scale,
-                                     __global const uint* root_ref_count,
+/* The second pass's records of a batch's roots (roots a.root_begin..): records[g] the node count
+ * of root a.root_begin + g when its subtree outgrew the first pass's a.first_scale * (count + 1),
+ * else 0; their exclusive scan places each subtree (kd_build_small_subtrees). */
+__kernel void kd_second_pass_records(KdSmallBatchArgs a, __global const KdSmallRoot* small_roots,
                                      __global const uint* subtree_node_count,
                                      __global uint* records) {
     const uint g = get_global_id(0);
-    if (g >= roots) return;
-    const uint q = root_begin + g, nodes = subtree_node_count[q];
-    records[g] = nodes > first_scale * (root_ref_count[q] + 1) ? nodes : 0u;
+    if (g >= a.roots) return;
+    const uint q = a.root_begin + g, nodes = subtree_node_count[q];
+    records[g] = nodes > a.first_scale * (small_roots[q].ref_count + 1) ? nodes : 0u;
 }

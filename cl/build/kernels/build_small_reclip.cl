@@ -20,7 +20,8 @@
 
 typedef struct KdClippedTable {
     float candidates[KDRAY_RECLIP_REFS * 8]; /* per reference: its clipped box's candidate lanes */
-    uint masks[KDRAY_RECLIP_REFS * 16]; /* per reference: 8 lanes below, 8 above (side_masks) */
+    /* per reference: 8 lanes below, 8 above (as side_masks) */
+    uint masks[KDRAY_RECLIP_REFS * KDRAY_MASK_WORDS_PER_REF];
     uchar ref[KDRAY_RECLIP_REFS];       /* its index in the small root's list */
     KdTrianglePlane planes[KDRAY_RECLIP_REFS]; /* per reference: its triangle's plane */
 } KdClippedTable;
@@ -69,8 +70,8 @@ inline int kd_clip_node_table(KdBox box, ulong* mask, uint start, __global const
             below_bits |= as_uint8(is_below) & (1u << m);
             above_bits |= as_uint8(is_above) & (1u << m);
         }
-        vstore8(below_bits, 0, t->masks + l * 16);
-        vstore8(above_bits, 1, t->masks + l * 16);
+        vstore8(below_bits, 0, t->masks + l * KDRAY_MASK_WORDS_PER_REF);
+        vstore8(above_bits, 1, t->masks + l * KDRAY_MASK_WORDS_PER_REF);
     }
     *mask = (1ul << n) - 1ul;
     return 1;
@@ -85,8 +86,9 @@ inline uint kd_best_clipped_split(KdBox box, ulong mask, const KdClippedTable* t
     for (ulong rest = mask; rest != 0; rest &= rest - 1) {
         const uint l = kd_lowest_bit(rest);
         kd_price_candidates(&s, vload8(l, t->candidates),
-                            convert_ulong8(vload8(0, t->masks + l * 16)),
-                            convert_ulong8(vload8(1, t->masks + l * 16)), l * 6);
+                            convert_ulong8(vload8(0, t->masks + l * KDRAY_MASK_WORDS_PER_REF)),
+                            convert_ulong8(vload8(1, t->masks + l * KDRAY_MASK_WORDS_PER_REF)),
+                            l * 6);
     }
     return kd_cheapest_candidate(&s);
 }

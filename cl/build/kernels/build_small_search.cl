@@ -164,9 +164,9 @@ inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global cons
     kd_start_split_search(&s, box, mask, cost_traversal, cost_intersection, empty_bonus);
     for (ulong rest = mask; rest != 0; rest &= rest - 1) {
         const uint j = kd_lowest_bit(rest), ref = start + j;
-        kd_price_candidates(&s, kd_candidate_lanes(ref_box + (size_t)ref * 6),
-                            vload8(0, root_masks + (size_t)j * 16),
-                            vload8(1, root_masks + (size_t)j * 16), ref * 6);
+        kd_price_candidates(&s, kd_candidate_lanes(ref_box + (size_t)ref * KDRAY_BOX_FLOATS),
+                            vload8(0, root_masks + (size_t)j * KDRAY_MASK_WORDS_PER_REF),
+                            vload8(1, root_masks + (size_t)j * KDRAY_MASK_WORDS_PER_REF), ref * 6);
     }
     return kd_cheapest_candidate(&s);
 }

@@ -41,28 +41,27 @@ inline uint16 kd_hash16(uint16 x) {
     return x;
 }
 inline float16 kd_unit_float16(uint16 h) {
-    return convert_float16(h >> 8) * (1.0f / 16777216.0f);
+    return KDRAY_UNIT_FLOAT(convert_float16, h);
 }
 
 /* Primary ray r of pixels (x, y), one per lane: kd_primary_ray and kd_camera_ray of core/
- * kd_render.h operation for operation, so that each lane's ray is the scalar one bit for bit. */
+ * kd_render.h through the same macros, so that each lane's ray is the scalar one bit for bit. */
 inline KdPacketRays kd_primary_packet(const KdView* view, uint16 x, uint16 y, kd_u32 r,
                                       int16 valid) {
     float16 px = convert_float16(x) + 0.5f, py = convert_float16(y) + 0.5f;
     if (view->spp > 1u && r != view->spp) {
-        const uint16 h = kd_hash16((y * view->width + x) * 0x9E3779B9u ^ kd_hash(r + view->seed));
+        const uint16 h = kd_hash16(KDRAY_SAMPLE_KEY(view, x, y, r));
         px = convert_float16(x) + kd_unit_float16(h);
         py = convert_float16(y) + kd_unit_float16(kd_hash16(h));
     }
-    const float16 sx = (2.0f * px / (kd_f32)view->width - 1.0f) * view->tan_half_fov * view->aspect;
-    const float16 sy = (1.0f - 2.0f * py / (kd_f32)view->height) * view->tan_half_fov;
+    const float16 sx = KDRAY_SCREEN_X(view, px);
+    const float16 sy = KDRAY_SCREEN_Y(view, py);
     KdPacketRays rays;
     for (int a = 0; a < 3; ++a) {
         rays.org[a] = (float16)(view->origin[a]);
-        rays.dir[a] = view->forward[a] + (view->right[a] * sx + view->up[a] * sy);
+        rays.dir[a] = KDRAY_CAMERA_DIR(view, a, sx, sy);
     }
-    const float16 inv = 1.0f / sqrt(rays.dir[0] * rays.dir[0] + rays.dir[1] * rays.dir[1] +
-                                    rays.dir[2] * rays.dir[2]);
+    const float16 inv = KDRAY_INV_LENGTH3(rays.dir[0], rays.dir[1], rays.dir[2]);
     for (int a = 0; a < 3; ++a) rays.dir[a] = rays.dir[a] * inv;
     rays.tmin = (float16)(0.0f);
     rays.tmax = (float16)(KDRAY_INF);

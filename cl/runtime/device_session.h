@@ -4,10 +4,11 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "cl/runtime/device.h"
 
-namespace kdray::cli {
+namespace kdray {
 
 class DeviceSession {
   public:
@@ -24,4 +25,4 @@ class DeviceSession {
     std::unique_ptr<ClDevice> device_;
 };
 
-}  // namespace kdray::cli
+}  // namespace kdray

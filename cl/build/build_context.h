@@ -1,0 +1,97 @@
+// build_context.h — what every host stage of the OpenCL kd-tree builder uses (internal to
+// cl/build/): the device, its queue, the build's counted memory, the primitives and the builder's
+// kernels (BuildContext), and the records that cross stages (BuildOutput: the node records by id,
+// their batches and the large stage's leaf store). The stages themselves are bounds.cpp,
+// large_level.cpp, small_roots.cpp, small_subtrees.cpp and output.cpp, chained by
+// opencl_builder.cpp.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cl/build/opencl_builder.h"
+#include "cl/runtime/cl_error.h"
+#include "cl/runtime/device_memory.h"
+#include "cl/runtime/primitives.h"
+#include "core/kd_build_shared.h"
+
+namespace kdray::build_detail {
+
+/// The builder's kernels, created once per device and large_split_bins (builder_kernels).
+struct BuilderKernels {
+    cl::Kernel compute_aabbs, bin_large, split_large, classify, count_large, emit_large, distribute;
+    cl::Kernel split_masks, build_subtrees, second_pass_records;
+    cl::Kernel size_subtrees, place_subtrees, write_nodes, write_small;
+};
+
+/// The kernels of `device` for large_split_bins (BuildParams::large_split_bins, compiled into the
+/// large stage's program), from programs built once (program cache) and kernels created once
+/// (cached_kernels). A cl::Kernel carries its arguments, so one set serves one build at a time:
+/// kdray builds one after another on the device's one queue, which every build uses.
+BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins);
+
+/// The device side of one build, shared by its stages.
+struct BuildContext {
+    BuildContext(ClDevice& d, const BuildParams& p)
+        : device(d),
+          queue(d.queue()),
+          memory(d),
+          primitives(d),
+          kernels(builder_kernels(d, p.large_split_bins)),
+          params(p) {}
+
+    ClDevice& device;
+    cl::CommandQueue& queue;
+    DeviceMemory memory;
+    ClPrimitives primitives;
+    BuilderKernels& kernels;
+    BuildParams params;
+
+    /// A counted array of `count` elements of T (sized by the shared struct, not by hand).
+    template <class T>
+    DeviceArray allocate(std::size_t count, const std::string& what) {
+        return memory.allocate(count * sizeof(T), what);
+    }
+    /// Makes `array` hold `count` elements of T, keeping its first `used`.
+    template <class T>
+    void reserve(DeviceArray& array, std::size_t count, std::size_t used, const std::string& what) {
+        memory.reserve(array, count * sizeof(T), used * sizeof(T), what);
+    }
+    template <class T>
+    void write(const DeviceArray& array, const std::vector<T>& values) {
+        with_cl_context("uploading build data", [&] {
+            queue.enqueueWriteBuffer(array.buffer(), CL_TRUE, 0, values.size() * sizeof(T),
+                                     values.data());
+        });
+    }
+    cl_uint read_uint(const DeviceArray& array, std::size_t index);
+};
+
+/// The node records by id (KdBuildNode) and the id ranges in creation order, children after
+/// their parents (the batches the output stage walks), with the large stage's leaf store.
+struct BuildOutput {
+    DeviceArray records;
+    cl_uint node_count = 0;
+    std::vector<std::pair<cl_uint, cl_uint>> batches;  // (first id, count)
+    // Leaves of the large stage keep their triangles here (KdBuildNode.leaf_first).
+    DeviceArray leaf_store;
+    cl_uint leaf_refs = 0;
+
+    /// Room for `nodes` records in all; throws when they exceed the layout's offsets.
+    void reserve_records(BuildContext& ctx, std::size_t nodes);
+    /// The next `count` ids, as one batch.
+    void add_batch(cl_uint count);
+};
+
+/// A KdBuildBox of an Aabb.
+KdBuildBox build_box(const Aabb& b);
+
+/// `value` as 32 bits; throws naming `what` when it does not fit.
+cl_uint checked_u32(std::uint64_t value, const char* what);
+
+/// Throws when `count` things named `what` exceed the layout's 30 offset bits.
+void check_offset_limit(std::size_t count, const char* what);
+
+}  // namespace kdray::build_detail

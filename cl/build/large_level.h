@@ -1,0 +1,39 @@
+// large_level.h — the large-node stage of the OpenCL builder (Zhou et al. 2008, §4.1): one level
+// of active large nodes at a time, every node of the level at once (internal to cl/build/; the
+// kernels are build_large.cl's).
+#pragma once
+
+#include "cl/build/bounds.h"
+#include "cl/build/build_context.h"
+#include "cl/build/small_roots.h"
+
+namespace kdray::build_detail {
+
+/// The active large nodes of one level (KdLargeNode each) and their references. Node i's
+/// references are ref_start[i] .. + ref_count[i], in reduction chunks chunk_start[i] ..
+/// chunk_start[i + 1] (nodes + 1 entries, the last the total): the segments of primitives.cl's
+/// reduction. References: triangle id and box clipped to the node (KdBuildBox).
+struct LargeLevel {
+    cl_uint nodes = 0, refs = 0, chunks = 0;
+    DeviceArray node, ref_start, ref_count, chunk_start;
+    DeviceArray ref_tri, ref_box;
+
+    /// Level 0: the root (node 0, the scene's bounds) holding every triangle's reference.
+    static LargeLevel root(BuildContext& ctx, TriangleBounds& triangles, const Aabb& bounds);
+    /// A level of `nodes` nodes and `refs` references in `chunks` chunks, not yet written.
+    static LargeLevel allocate(BuildContext& ctx, cl_uint nodes, cl_uint refs, cl_uint chunks);
+
+    /// Splits every node of this level: writes their node records (with their chains of
+    /// empty-space cuts and their empty leaves) to `output`, appends the children of at most T
+    /// references to `small` and the leaves' references to the leaf store, and returns the
+    /// next level: the children that stay large. `force_leaf`: every node becomes a leaf.
+    LargeLevel next(BuildContext& ctx, const TriangleBounds& triangles, bool force_leaf,
+                    BuildOutput& output, SmallRoots& small) const;
+};
+
+/// Large-node stage (§4.1): levels until no large node is left; a scene of at most T triangles
+/// is one small root from the start. Returns the number of levels.
+int run_large_stage(BuildContext& ctx, TriangleBounds& triangles, const Aabb& bounds,
+                    BuildOutput& output, SmallRoots& small);
+
+}  // namespace kdray::build_detail

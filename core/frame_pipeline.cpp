@@ -1,0 +1,89 @@
+#include "core/frame_pipeline.h"
+
+#include <algorithm>
+#include <utility>
+
+#include "core/error.h"
+#include "core/image.h"
+#include "core/stats_json.h"
+
+namespace kdray {
+
+double ms_since(FrameClock::time_point start) {
+    return std::chrono::duration<double, std::milli>(FrameClock::now() - start).count();
+}
+
+FramePipeline::FramePipeline(TreeBuilder& builder, Tracer& tracer, RenderSettings settings,
+                             FrameOptions options)
+    : builder_(builder),
+      tracer_(tracer),
+      settings_(std::move(settings)),
+      options_(std::move(options)) {}
+
+nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
+                                           const std::function<void()>& computed) {
+    if (!job.scene) throw Error(job.input + ": render_frame without a scene");
+    const Scene& scene = *job.scene;
+    // Choose the camera: the render file's at this frame, else the first completed frame's view.
+    if (written_ == 0) framed_ = frame_bounds(scene.bounds());
+    const Camera camera = settings_.camera_given ? settings_.camera_at(int(job.number)) : framed_;
+
+    // Build, then trace; the tracer's program for these effects is built outside trace_ms.
+    BuiltTree built = builder_.build(scene);
+    RenderInputs inputs = prepare_render(scene, settings_, camera, kd_u32(job.number));
+    inputs.normals = options_.aov;
+    inputs.intersect = options_.intersect;
+    inputs.packets = options_.packets;
+    tracer_.prepare(inputs);
+    const auto trace_start = FrameClock::now();
+    const FrameResult result = tracer_.trace(built, scene, inputs);
+    const double trace_ms = ms_since(trace_start);
+    if (computed) computed();
+
+    // Write the image and the AOV, each whole or not at all.
+    const std::string stem = std::filesystem::path(job.input).stem().string();
+    const std::filesystem::path image_path = options_.out_dir / (stem + "." + options_.format);
+    const std::filesystem::path aov_path = options_.out_dir / (stem + ".aov.exr");
+    if (output == Output::Write) {
+        write_image(image_path, result.image);
+        try {
+            if (options_.aov) write_aov(aov_path, result.hits);
+        } catch (const Error&) {
+            // A frame is its image and its AOV: one without the other is a failed frame, and
+            // it leaves neither (a full disk, say).
+            std::error_code ignored;
+            std::filesystem::remove(image_path, ignored);
+            throw;
+        }
+        ++written_;
+    }
+
+    // The frame's record.
+    const RayTotals& rays = result.rays;
+    // Centre rays that hit: with a camera inside a closed mesh, every miss is a leak.
+    const auto hit_pixels = std::count_if(result.hits.hits.begin(), result.hits.hits.end(),
+                                          [](const KdHit& h) { return h.prim != KDRAY_NO_HIT; });
+    nlohmann::json frame = {
+        {"frame", job.number},
+        {"input", job.input},
+        {"image", image_path.filename().string()},
+        {"scene", scene_json(scene)},
+        {"tree", tree_json(built, scene.triangle_count())},
+        {"tracer", tracer_.name()},
+        {"effects", inputs.effects.to_json()},
+        {"load_ms", job.load_ms},
+        {"build_ms", built.report.build_ms},
+        {"trace_ms", trace_ms},
+        {"frame_ms", ms_since(job.start)},
+        {"rays",
+         {{"primary", rays.primary},
+          {"shadow", rays.shadow},
+          {"reflection", rays.reflection},
+          {"refraction", rays.refraction}}},
+        {"hit_pixels", hit_pixels},
+        {"mrays_per_s", trace_ms > 0 ? double(rays.total()) / (trace_ms * 1e3) : 0.0}};
+    if (options_.aov) frame["aov"] = aov_path.filename().string();
+    return frame;
+}
+
+}  // namespace kdray

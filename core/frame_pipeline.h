@@ -1,0 +1,74 @@
+// frame_pipeline.h — what a frame of `kdray render` is, whichever builder and tracer run it:
+// the scene loaded, its tree built, the frame traced, the image (and the hit AOV) written, and
+// the frame's stats.json record. The run and its warm-up go through the same render_frame; the
+// warm-up only writes nothing.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/camera.h"
+#include "core/render_file.h"
+#include "core/render_setup.h"
+#include "core/scene.h"
+#include "core/tracer.h"
+#include "core/tree_builder.h"
+
+namespace kdray {
+
+using FrameClock = std::chrono::steady_clock;
+
+/// Milliseconds from `start` to now.
+double ms_since(FrameClock::time_point start);
+
+/// What every frame of a run shares beside the builder, the tracer and the render file.
+struct FrameOptions {
+    std::filesystem::path out_dir;
+    std::string format = "png";  // the image's format and extension: png or exr
+    bool aov = false;            // also <stem>.aov.exr; the hits then carry their normals
+    kd_u32 intersect = KDRAY_INTERSECT_WATERTIGHT;  // KDRAY_INTERSECT_*
+    RenderInputs::Packets packets = RenderInputs::Packets::Auto;
+};
+
+/// One frame: its number (its position in the run's naturally sorted inputs), its OBJ, the scene
+/// loaded from it and how long that took, and when the frame began (frame_ms counts from there).
+struct FrameJob {
+    std::size_t number = 0;
+    std::string input;
+    const Scene* scene = nullptr;
+    double load_ms = 0;
+    FrameClock::time_point start = FrameClock::now();
+};
+
+class FramePipeline {
+  public:
+    enum class Output { Write, Discard };
+
+    FramePipeline(TreeBuilder& builder, Tracer& tracer, RenderSettings settings,
+                  FrameOptions options);
+
+    /// Builds and traces `job`'s frame and, with Output::Write, writes its files; returns its
+    /// stats.json record. The tracer's program for the frame's effects is prepared outside
+    /// trace_ms. `computed`, when given, runs once the build and the trace are done, before the
+    /// files are written. Without a camera in the render file, frames are framed on the scene of
+    /// the first frame that completes (Write). Throws Error from any stage.
+    nlohmann::json render_frame(const FrameJob& job, Output output = Output::Write,
+                                const std::function<void()>& computed = {});
+
+    const RenderSettings& settings() const { return settings_; }
+
+  private:
+    TreeBuilder& builder_;
+    Tracer& tracer_;
+    RenderSettings settings_;
+    FrameOptions options_;
+    std::size_t written_ = 0;  // frames completed with Output::Write
+    Camera framed_;
+};
+
+}  // namespace kdray

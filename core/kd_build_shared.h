@@ -1,0 +1,200 @@
+/* kd_build_shared.h — the layouts and constants of the OpenCL kd-tree builder (Zhou, Hou, Wang &
+ * Guo 2008) that its host stages (the .cpp files of cl/build) and its kernels (the .cl files of
+ * cl/build/kernels) both see: node records, per-node and per-root records of the large and small
+ * stages, and the by-value argument records of the kernels with many inputs.
+ *
+ * The rules of core/kd_shared.h hold here too: the header compiles as C++ and as OpenCL C (CMake
+ * inlines it into the embedded program source), shared structs hold only 32-bit scalars (kd_u32,
+ * kd_i32, kd_f32) and arrays of them with explicit padding, every struct states its size, the
+ * host static_asserts it and a test kernel (layout.cl) reports the device's sizeof. Constants are
+ * defined here once; the host passes -D options only for true compile-time choices (the number
+ * of SAH bins, the popcount of CPU devices).
+ *
+ * Boxes: KdBuildBox, 6 floats lo.xyz hi.xyz; arrays of boxes are flat float arrays of
+ * KDRAY_BOX_FLOATS per box (primitives.cl's segmented reduction reads and writes them so). */
+#ifndef KDRAY_KD_BUILD_SHARED_H
+#define KDRAY_KD_BUILD_SHARED_H
+
+#include "core/kd_shared.h"
+
+/* Floats per box in the builder's box arrays: lo.xyz hi.xyz (sizeof(KdBuildBox) / 4). */
+#define KDRAY_BOX_FLOATS 6
+
+/* KdBuildNode.axis of a small root: the small stage writes its subtree, and leaf_first is the
+ * small root's index. */
+#define KDRAY_SMALL_ROOT_AXIS 4u
+
+/* Most references a small root holds: the width of the small stage's 64-bit triangle masks, and
+ * so the largest large-node threshold T. */
+#define KDRAY_SMALL_ROOT_MAX_REFS 64
+
+/* Empty-space cuts one large node may chain in one level (each side of its box at most once). */
+#define KDRAY_MAX_CUTS 6u
+
+/* Segments of the large stage's per-child slot arrays (build_large.cl): every node of a level
+ * owns two child slots (2i below, 2i+1 above), and each kind below is one segment of 2 * nodes
+ * values, all scanned at once. */
+#define KDRAY_SLOT_LARGE 0u        /* the child stays a large node (1/0) */
+#define KDRAY_SLOT_LARGE_REFS 1u   /* ... its reference count */
+#define KDRAY_SLOT_LARGE_CHUNKS 2u /* ... its reduction chunks */
+#define KDRAY_SLOT_SMALL 3u        /* the child becomes a small root (1/0) */
+#define KDRAY_SLOT_SMALL_REFS 4u   /* ... its reference count */
+#define KDRAY_SLOT_LEAF_REFS 5u    /* references of a node that becomes a leaf (in its slot 2i) */
+#define KDRAY_SLOT_CHILD 6u /* new nodes of generation 0 (then 1, ..., KDRAY_MAX_CUTS): node ids \
+                             */
+#define KDRAY_SLOT_KINDS (KDRAY_SLOT_CHILD + KDRAY_MAX_CUTS + 1u)
+
+/* Counts per SAH bin of a large node's reduction chunk (build_large_sah.cl): 3 axes, the
+ * references whose lo and whose hi fall in the bin. */
+#define KDRAY_BIN_COUNTS 6u
+
+/* Split-candidate masks per small-root reference (build_small.cl): 6 candidates below and 6
+ * above, each group padded to 8 ulongs, so that a reference's masks load as two ulong8. */
+#define KDRAY_MASK_WORDS_PER_REF 16u
+#define KDRAY_MASK_BYTES_PER_REF (KDRAY_MASK_WORDS_PER_REF * 8u)
+
+/* KdBuildBox — 24 bytes. lo[3], hi[3]: the box's corners. */
+typedef struct KdBuildBox {
+    kd_f32 lo[3];
+    kd_f32 hi[3];
+} KdBuildBox;
+
+/* KdBuildNode — 24 bytes. A node of the builder before its output stage lays the tree out in
+ * preorder. Node ids are handed out level by level, so a child's id is always larger than its
+ * parent's.
+ *   axis         inner: split axis 0/1/2; leaf: KDRAY_LEAF_AXIS; small root: KDRAY_SMALL_ROOT_AXIS.
+ *   split        inner: split plane position; otherwise 0.
+ *   child[2]     inner: node ids of the below and above children; otherwise 0.
+ *   leaf_count   leaf: number of triangles; otherwise 0.
+ *   leaf_first   leaf: first entry of its run in the builder's leaf reference store; small root:
+ *                its small root index (the small stage writes its subtree in KdSmallNode
+ *                records of its own); inner: 0. */
+typedef struct KdBuildNode {
+    kd_u32 axis;
+    kd_f32 split;
+    kd_u32 child[2];
+    kd_u32 leaf_count;
+    kd_u32 leaf_first;
+} KdBuildNode;
+
+/* KdSmallNode — 16 bytes. A node of the small stage, in preorder within its small root's subtree.
+ *   axis_and_offset  bits 0-1: split axis, or KDRAY_LEAF_AXIS; bits 2-31: inner: the above
+ *                    child's index in the subtree; leaf: its first leaf reference, counted from
+ *                    the subtree's first.
+ *   split_or_count   inner: split position (float bits); leaf: triangle count.
+ *   mask_lo, mask_hi leaf: bits 0-31 and 32-63 of its mask over the small root's references
+ *                    (bit i: the root's i-th triangle); inner: 0. */
+typedef struct KdSmallNode {
+    kd_u32 axis_and_offset;
+    kd_u32 split_or_count;
+    kd_u32 mask_lo;
+    kd_u32 mask_hi;
+} KdSmallNode;
+
+/* KdLargeNode — 32 bytes. An active node of a large-stage level (its references are given by the
+ * level's start, count and chunk arrays, which the segmented reduction reads).
+ *   box    the node's box (after kd_split_large_nodes: the box of its chain's last node).
+ *   id     its node id (KdBuildNode index).
+ *   depth  its depth in the tree (root 0). */
+typedef struct KdLargeNode {
+    KdBuildBox box;
+    kd_u32 id;
+    kd_u32 depth;
+} KdLargeNode;
+
+/* KdLargeSplit — 8 bytes. A large node's split: axis 0/1/2, or KDRAY_LEAF_AXIS when the node
+ * becomes a leaf; pos the plane's position. */
+typedef struct KdLargeSplit {
+    kd_u32 axis;
+    kd_f32 pos;
+} KdLargeSplit;
+
+/* KdLargeCuts — 56 bytes. The chain of empty-space cuts of one large node in one level.
+ *   count    cuts in the chain (at most KDRAY_MAX_CUTS).
+ *   code[g]  cut g: axis * 2 + (the kept side is above).
+ *   pos[g]   cut g: the plane's position.
+ *   pad      0. */
+typedef struct KdLargeCuts {
+    kd_u32 count;
+    kd_u32 code[KDRAY_MAX_CUTS];
+    kd_f32 pos[KDRAY_MAX_CUTS];
+    kd_u32 pad;
+} KdLargeCuts;
+
+/* KdSmallRoot — 40 bytes. A small root (a node of at most KDRAY_SMALL_ROOT_MAX_REFS references
+ * whose subtree the small stage builds).
+ *   box        its box.
+ *   ref_start  its first reference in the small roots' reference lists (a root's references are
+ *              contiguous, and so are consecutive roots').
+ *   ref_count  its number of references.
+ *   node_id    its KdBuildNode id.
+ *   depth      its depth in the tree. */
+typedef struct KdSmallRoot {
+    KdBuildBox box;
+    kd_u32 ref_start;
+    kd_u32 ref_count;
+    kd_u32 node_id;
+    kd_u32 depth;
+} KdSmallRoot;
+
+/* KdLargeSplitArgs — 32 bytes. kd_split_large_nodes' scalars: the level's node count, the depth
+ * limit, force_leaf (1: every node becomes a leaf, the level outgrew the reference budget),
+ * empty_ratio C_e, the SAH costs C_t, C_i and the empty-space bonus; pad 0. */
+typedef struct KdLargeSplitArgs {
+    kd_u32 nodes;
+    kd_u32 max_depth;
+    kd_u32 force_leaf;
+    kd_f32 empty_ratio;
+    kd_f32 cost_traversal;
+    kd_f32 cost_intersection;
+    kd_f32 empty_bonus;
+    kd_u32 pad;
+} KdLargeSplitArgs;
+
+/* KdLargeLevelArgs — 32 bytes. What the large stage's per-level kernels after the split know of
+ * their level: its nodes, references and reduction chunks; where this level's new node ids,
+ * small roots, small-root references and leaf references start; and the large-node threshold T
+ * (more references stay large). */
+typedef struct KdLargeLevelArgs {
+    kd_u32 nodes;
+    kd_u32 refs;
+    kd_u32 chunks;
+    kd_u32 node_base;
+    kd_u32 small_root_base;
+    kd_u32 small_ref_base;
+    kd_u32 leaf_ref_base;
+    kd_u32 large_threshold;
+} KdLargeLevelArgs;
+
+/* KdSmallBatchArgs — 48 bytes. A batch of small roots (root_begin.., `roots` of them, whose
+ * references start at ref_begin) and how the small stage builds and lays out their subtrees:
+ * first_scale records per reference and root in the first pass, second_pass (1: the pass that
+ * rebuilds the subtrees that outgrew the first), the depth limit, the SAH costs C_t, C_i and the
+ * empty-space bonus; pad 0. */
+typedef struct KdSmallBatchArgs {
+    kd_u32 root_begin;
+    kd_u32 roots;
+    kd_u32 ref_begin;
+    kd_u32 first_scale;
+    kd_u32 second_pass;
+    kd_u32 max_depth;
+    kd_f32 cost_traversal;
+    kd_f32 cost_intersection;
+    kd_f32 empty_bonus;
+    kd_u32 pad[3];
+} KdSmallBatchArgs;
+
+#ifndef KDRAY_DEVICE_CODE
+static_assert(sizeof(KdBuildBox) == KDRAY_BOX_FLOATS * sizeof(kd_f32), "KdBuildBox is 24 bytes");
+static_assert(sizeof(KdBuildNode) == 24, "KdBuildNode is 24 bytes on every device");
+static_assert(sizeof(KdSmallNode) == 16, "KdSmallNode is 16 bytes on every device");
+static_assert(sizeof(KdLargeNode) == 32, "KdLargeNode is 32 bytes on every device");
+static_assert(sizeof(KdLargeSplit) == 8, "KdLargeSplit is 8 bytes on every device");
+static_assert(sizeof(KdLargeCuts) == 56, "KdLargeCuts is 56 bytes on every device");
+static_assert(sizeof(KdSmallRoot) == 40, "KdSmallRoot is 40 bytes on every device");
+static_assert(sizeof(KdLargeSplitArgs) == 32, "KdLargeSplitArgs is 32 bytes on every device");
+static_assert(sizeof(KdLargeLevelArgs) == 32, "KdLargeLevelArgs is 32 bytes on every device");
+static_assert(sizeof(KdSmallBatchArgs) == 48, "KdSmallBatchArgs is 48 bytes on every device");
+#endif
+
+#endif /* KDRAY_KD_BUILD_SHARED_H */

@@ -1,0 +1,75 @@
+#include "core/stats_json.h"
+
+#include <algorithm>
+#include <vector>
+
+#include "core/tree_stats.h"
+
+namespace kdray {
+
+nlohmann::json scene_json(const Scene& scene) {
+    return {{"path", scene.path.string()},
+            {"triangles", scene.triangle_count()},
+            {"zero_area_triangles", scene.zero_area_triangles},
+            // Whether the frame shades smooth (the OBJ's vn) or flat.
+            {"vertex_normals", scene.has_vertex_normals()},
+            {"materials", scene.materials.size()},
+            {"warnings", scene.warnings}};
+}
+
+nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
+    const KdTree& tree = built.tree;
+    nlohmann::json j = to_json(compute_tree_stats(tree, triangle_count, tree.params.costs));
+    j["builder"] = tree.builder;
+    j["build_ms"] = built.report.build_ms;
+    nlohmann::json stages = nlohmann::json::object();
+    for (const auto& [stage, ms] : built.report.timings_ms) stages[stage] = ms;
+    j["timings_ms"] = stages;
+    const BuildParams& p = tree.params;
+    j["params"] = {{"cost_traversal", p.costs.traversal},
+                   {"cost_intersection", p.costs.intersection},
+                   {"max_depth", p.max_depth}};
+    if (tree.builder == "opencl") {
+        j["params"]["large_node_threshold"] = p.large_node_threshold;
+        j["params"]["empty_space_ratio"] = p.empty_space_ratio;
+        j["params"]["large_split_bins"] = p.large_split_bins;
+        j["params"]["empty_bonus"] = p.empty_bonus;
+        j["large_node_levels"] = built.report.large_node_levels;
+        j["small_node_levels"] = built.report.small_node_levels;
+        j["device_bytes"] = built.report.device_bytes;
+        if (triangle_count > 0)
+            j["device_bytes_per_triangle"] =
+                double(built.report.device_bytes) / double(triangle_count);
+    } else {
+        j["params"]["empty_bonus"] = p.empty_bonus;
+    }
+    return j;
+}
+
+nlohmann::json summarise_frames(const nlohmann::json& frames) {
+    double total_ms = 0, worst_ms = 0, build_ms = 0, trace_ms = 0;
+    std::vector<std::size_t> numbers;
+    for (const nlohmann::json& frame : frames) {
+        const double ms = frame.value("frame_ms", 0.0);
+        total_ms += ms;
+        worst_ms = std::max(worst_ms, ms);
+        build_ms += frame.value("build_ms", 0.0);
+        trace_ms += frame.value("trace_ms", 0.0);
+        numbers.push_back(frame.value("frame", std::size_t(0)));
+    }
+    std::sort(numbers.begin(), numbers.end());
+    const double n = double(numbers.size());
+    const double mean_ms = n > 0 ? total_ms / n : 0.0;
+    nlohmann::json j = {{"frames", numbers.size()},
+                        {"mean_frame_ms", mean_ms},
+                        {"worst_frame_ms", worst_ms},
+                        {"mean_build_ms", n > 0 ? build_ms / n : 0.0},
+                        {"mean_trace_ms", n > 0 ? trace_ms / n : 0.0},
+                        {"frames_per_second", mean_ms > 0 ? 1000.0 / mean_ms : 0.0},
+                        {"frame_numbers", numbers}};
+    if (std::adjacent_find(numbers.begin(), numbers.end()) != numbers.end())
+        j["warning"] = "some frame numbers appear in more than one folder";
+    return j;
+}
+
+}  // namespace kdray

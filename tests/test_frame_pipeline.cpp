@@ -1,0 +1,165 @@
+// test_frame_pipeline.cpp — the frame pipeline and the backends behind it: the factory hands out
+// the builder and tracer a name asks for; the OpenCL tracer keeps one plan per combination and
+// traces the OpenCL builder's device-resident tree to the hits of the host tree; a frame rendered
+// for the warm-up (Output::Discard) is the frame the run renders, only unwritten.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <memory>
+
+#include "cl/backends.h"
+#include "cl/build/opencl_tree_builder.h"
+#include "cl/render/opencl_tracer.h"
+#include "cl/runtime/program_cache.h"
+#include "core/camera.h"
+#include "core/error.h"
+#include "core/frame_pipeline.h"
+#include "core/reference_builder.h"
+#include "core/reference_tracer.h"
+#include "core/render_setup.h"
+#include "core/stats_json.h"
+#include "tests/support.h"
+#include "tests/test_opencl_fixture.h"
+
+namespace fs = std::filesystem;
+using namespace kdray;
+
+namespace {
+
+RenderSettings small_settings() {
+    RenderSettings s;
+    s.width = 24;
+    s.height = 16;
+    return s;
+}
+
+}  // namespace
+
+TEST_CASE("backends: the factory picks the builder and the tracer by name") {
+    DeviceSession session("");
+    const BuildParams params;
+    auto reference = make_tree_builder("reference", params, session);
+    CHECK(dynamic_cast<ReferenceTreeBuilder*>(reference.get()) != nullptr);
+    CHECK(reference->description() == "reference (CPU, full SAH)");
+    CHECK(reference->computes_on_host());
+    // Neither reference backend opens the device.
+    auto reference_tracer = make_tracer("reference", 1, session);
+    CHECK(reference_tracer->name() == "reference");
+    CHECK(reference_tracer->computes_on_host());
+    CHECK_FALSE(session.is_open());
+
+    auto opencl = make_tree_builder("opencl", params, session);
+    CHECK(dynamic_cast<OpenClTreeBuilder*>(opencl.get()) != nullptr);
+    CHECK_FALSE(session.is_open());  // on first need only
+    auto opencl_tracer = make_tracer("opencl", 0, session);
+    CHECK(dynamic_cast<OpenClTracer*>(opencl_tracer.get()) != nullptr);
+    CHECK(opencl_tracer->name() == "opencl");
+    CHECK(session.is_open());  // a bad device fails before the run makes anything
+    CHECK(opencl_tracer->computes_on_host() == session.device().is_cpu());
+    CHECK(opencl->description() == "opencl on " + session.device().info().name);
+
+    CHECK_THROWS_AS(make_tree_builder("embree", params, session), UsageError);
+    CHECK_THROWS_AS(make_tracer("embree", 0, session), UsageError);
+}
+
+TEST_CASE("backends: the OpenCL tracer traces the builder's device-resident tree") {
+    // The resident buffers must give the hits the host tree gives when uploaded: a tracer that
+    // ignored them, or read another build's, would differ.
+    ClDevice& device = test::opencl_test_device();
+    const Scene scene = test::random_triangles(300, 31);
+    const BuiltTree built = [&] {
+        BuiltTree b;
+        auto resident = std::make_shared<OpenClResidentTree>();
+        b.tree = build_opencl(device, scene, {}, &b.report, &resident->buffers);
+        b.on_device = resident;
+        return b;
+    }();
+    REQUIRE(built.on_device != nullptr);
+    BuiltTree host_only;
+    host_only.tree = built.tree;
+    const RenderInputs inputs =
+        prepare_render(scene, small_settings(), frame_bounds(scene.bounds()), 0);
+    OpenClTracer tracer(device);
+    const FrameResult resident = tracer.trace(built, scene, inputs);
+    const FrameResult uploaded = tracer.trace(host_only, scene, inputs);
+    REQUIRE(resident.hits.hits.size() == uploaded.hits.hits.size());
+    for (std::size_t i = 0; i < resident.hits.hits.size(); ++i) {
+        CHECK(resident.hits.hits[i].prim == uploaded.hits.hits[i].prim);
+        CHECK(resident.hits.hits[i].t == uploaded.hits.hits[i].t);
+    }
+    CHECK(resident.image.rgb == uploaded.image.rgb);
+}
+
+TEST_CASE("backends: the OpenCL tracer makes a frame's kernels once per combination") {
+    ClDevice& device = test::opencl_test_device();
+    const Scene scene = test::random_triangles(40, 32);
+    RenderSettings settings = small_settings();
+    const RenderInputs headlight = prepare_render(scene, settings, frame_bounds(scene.bounds()), 0);
+    settings.lights.push_back(Light{Light::Type::point, {0.5f, 3.0f, 0.5f}, {}, {5, 5, 5}});
+    const RenderInputs lit = prepare_render(scene, settings, frame_bounds(scene.bounds()), 0);
+    REQUIRE(headlight.effects.bits() != lit.effects.bits());
+
+    OpenClTracer tracer(device);
+    tracer.prepare(headlight);
+    const int builds = program_build_count();
+    tracer.prepare(headlight);
+    CHECK(tracer.plan_count() == 1);
+    BuiltTree built;
+    built.tree = build_reference(scene);
+    const FrameResult first = tracer.trace(built, scene, headlight);
+    const FrameResult again = tracer.trace(built, scene, headlight);
+    CHECK(tracer.plan_count() == 1);
+    CHECK(program_build_count() == builds);
+    CHECK(first.image.rgb == again.image.rgb);
+    tracer.trace(built, scene, lit);  // a frame not prepared plans on the spot
+    CHECK(tracer.plan_count() == 2);
+}
+
+TEST_CASE("frame pipeline: the warm-up's frame is the run's frame, unwritten") {
+    const fs::path dir = test::fresh_temp_dir("frame-pipeline");
+    const Scene scene = test::random_triangles(200, 33);
+    ReferenceTreeBuilder builder({});
+    ReferenceTracer tracer(1);
+    FrameOptions options;
+    options.out_dir = dir;
+    options.aov = true;
+    FramePipeline pipeline(builder, tracer, small_settings(), options);
+    const FrameJob job{3, (dir / "in" / "frame_3.obj").string(), &scene};
+
+    const nlohmann::json warm = pipeline.render_frame(job, FramePipeline::Output::Discard);
+    CHECK(fs::is_empty(dir));
+    bool computed = false;
+    const nlohmann::json run =
+        pipeline.render_frame(job, FramePipeline::Output::Write, [&] { computed = true; });
+    CHECK(computed);
+    CHECK(fs::exists(dir / "frame_3.png"));
+    CHECK(fs::exists(dir / "frame_3.aov.exr"));
+    // The same record but for the timings: the same frame, tree, effects and rays.
+    for (const char* key :
+         {"frame", "input", "image", "aov", "scene", "tracer", "effects", "rays", "hit_pixels"})
+        CHECK_MESSAGE(warm[key] == run[key], key);
+    CHECK(warm["tree"]["nodes"] == run["tree"]["nodes"]);
+    CHECK(run["tracer"] == "reference");
+    CHECK(run["frame"] == 3);
+    CHECK(run["rays"]["primary"] == 24 * 16);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("frame pipeline: one summary for a run and for folders") {
+    const nlohmann::json frames = nlohmann::json::array(
+        {{{"frame", 4}, {"frame_ms", 30.0}, {"build_ms", 10.0}, {"trace_ms", 15.0}},
+         {{"frame", 2}, {"frame_ms", 10.0}, {"build_ms", 4.0}, {"trace_ms", 5.0}}});
+    const nlohmann::json s = summarise_frames(frames);
+    CHECK(s["frames"] == 2);
+    CHECK(s["mean_frame_ms"].get<double>() == doctest::Approx(20.0));
+    CHECK(s["worst_frame_ms"].get<double>() == doctest::Approx(30.0));
+    CHECK(s["mean_build_ms"].get<double>() == doctest::Approx(7.0));
+    CHECK(s["mean_trace_ms"].get<double>() == doctest::Approx(10.0));
+    CHECK(s["frames_per_second"].get<double>() == doctest::Approx(50.0));
+    CHECK(s["frame_numbers"] == nlohmann::json::array({2, 4}));
+    CHECK_FALSE(s.contains("warning"));
+    nlohmann::json twice = frames;
+    twice.push_back(frames[0]);
+    CHECK(summarise_frames(twice).contains("warning"));
+    CHECK(summarise_frames(nlohmann::json::array())["frames_per_second"] == 0.0);
+}
