@@ -256,3 +256,70 @@ TEST_CASE("a full disk: the run fails naming the file, and no image is left unde
     CHECK(std::system(("umount '" + mount.string() + "'").c_str()) == 0);
     fs::remove_all(dir);
 }
+
+TEST_CASE("two inputs that would write one file are a usage error naming both, before any frame") {
+    const fs::path dir = fresh_temp_dir("hostile-collide");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    write_text_file(dir / "A" / "scene.obj", kTriangleObj);
+    write_text_file(dir / "B" / "scene.obj", kTriangleObj);
+    write_text_file(dir / "x.obj", kTriangleObj);
+    write_text_file(dir / "x.OBJ", kTriangleObj);
+    write_text_file(dir / "a.obj", kTriangleObj);
+    write_text_file(dir / "a.aov.obj", kTriangleObj);
+    const fs::path out = dir / "out";
+    auto run = [&](std::vector<std::string> inputs, std::vector<std::string> extra = {}) {
+        std::vector<std::string> args = {"render"};
+        for (const std::string& in : inputs) args.push_back((dir / in).string());
+        args.insert(args.end(), {"-o", out.string(), "--camera", camera.string(), "--builder",
+                                 "reference", "--tracer", "reference", "-q"});
+        args.insert(args.end(), extra.begin(), extra.end());
+        return run_kdray(args, kNoHang);
+    };
+    check_error(run({"A/scene.obj", "B/scene.obj"}), 2,
+                {"A/scene.obj", "B/scene.obj", "scene.png"});
+    check_error(run({"x.obj", "x.OBJ"}), 2, {"x.obj", "x.OBJ"});
+    check_error(run({"x.obj", "./x.obj"}), 2, {"x.obj", "would both write"});
+    check_error(run({"a.obj", "a.aov.obj"}, {"--aov", "--format", "exr"}), 2, {"a.aov.exr"});
+    CHECK_FALSE(fs::exists(out));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("an interpolated camera without a basis is refused before the first frame") {
+    const fs::path dir = fresh_temp_dir("hostile-camera");
+    // Keys at frames 0 and 2 on opposite sides of look_at: frame 1's position is look_at.
+    const fs::path camera = write_text_file(
+        dir / "keys.json", R"({"image":{"width":16,"height":12},"camera":[)"
+                           R"({"frame":0,"position":[0,0,3],"look_at":[0,0,0]},)"
+                           R"({"frame":2,"position":[0,0,-3],"look_at":[0,0,0]}]})");
+    std::vector<std::string> args = {"render"};
+    for (int f = 0; f < 3; ++f)
+        args.push_back(write_text_file(dir / ("f_" + std::to_string(f) + ".obj"), kTriangleObj));
+    args.insert(args.end(), {"-o", (dir / "out").string(), "--camera", camera.string(), "--builder",
+                             "reference", "--tracer", "reference", "-q"});
+    check_error(run_kdray(args, kNoHang), 1, {"keys.json", "frame 1", "look_at"});
+    CHECK_FALSE(fs::exists(dir / "out" / "f_0.png"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a file name that is not UTF-8 renders and gets a stats.json") {
+    const fs::path dir = fresh_temp_dir("hostile-utf8");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path obj = write_text_file(dir / "b\xff.obj", kTriangleObj);
+    const CommandResult r = render(obj, dir / "out", camera);
+    INFO(r.err);
+    CHECK(r.status == 0);
+    CHECK(fs::exists(dir / "out" / "stats.json"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("kdray stats on a stats.json with wrong types names the file and the field") {
+    const fs::path dir = fresh_temp_dir("hostile-stats");
+    const std::string head = R"({"summary":{},"frames":[)";
+    write_text_file(dir / "a" / "stats.json", head + R"({"frame":0,"frame_ms":"abc"}]})");
+    write_text_file(dir / "b" / "stats.json", head + R"({"frame":-5,"frame_ms":1}]})");
+    check_error(run_kdray({"stats", (dir / "a").string()}, kNoHang), 1,
+                {"stats.json", "frames[0].frame_ms"});
+    check_error(run_kdray({"stats", (dir / "b").string()}, kNoHang), 1,
+                {"stats.json", "frames[0].frame", "-5"});
+    fs::remove_all(dir);
+}
