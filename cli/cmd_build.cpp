@@ -38,7 +38,7 @@ int run_build(const BuildCommand& command) {
     if (!samples.empty()) report["build_ms_samples"] = samples;
     if (!command.output.empty()) report["tree_file"] = command.output;
     if (command.json) {
-        std::cout << report.dump(2) << "\n";
+        std::cout << json_text(report) << "\n";
     } else {
         for (const std::string& warning : scene.warnings)
             std::cerr << "kdray: warning: " << warning << "\n";

@@ -2,11 +2,14 @@
 // the hit AOV), then OUTDIR/stats.json for the run. Every file appears whole or not at all.
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <future>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <utility>
 
@@ -31,6 +34,8 @@ void create_output_dir(const std::filesystem::path& dir) {
     if (ec || !std::filesystem::is_directory(dir))
         throw Error(dir.string() + ": cannot create the output folder: " +
                     (ec ? ec.message() : std::string("a file of that name exists")));
+    // What a killed run (SIGKILL mid-write) left behind would otherwise stay for ever.
+    remove_stale_temporaries(dir);
 }
 
 /// One line on a terminal, rewritten in place: frame i/n, frames per second, time left.
@@ -58,7 +63,34 @@ FrameOptions frame_options(const RenderCommand& command) {
     return options;
 }
 
-/// Set by SIGINT/SIGTERM: the run stops after the frame in progress, whose files are written
+/// Two selected inputs that would write the same file (the same stem from two folders, x.obj and
+/// x.OBJ, a path given twice, a.obj's AOV and a.aov.obj's EXR image) are a usage error naming
+/// both, before anything renders. Names are compared without case, as a case-insensitive file
+/// system (macOS, Windows shares) would.
+void check_output_names(const std::vector<std::string>& inputs,
+                        const std::vector<std::size_t>& selected, const RenderCommand& command) {
+    std::map<std::string, std::size_t> writer;
+    auto lower = [](std::string s) {
+        std::transform(s.begin(), s.end(), s.begin(),
+                       [](unsigned char c) { return std::tolower(c); });
+        return s;
+    };
+    for (const std::size_t i : selected) {
+        const std::string stem = std::filesystem::path(inputs[i]).stem().string();
+        std::vector<std::string> names = {stem + "." + command.format};
+        if (command.aov) names.push_back(stem + ".aov.exr");
+        for (const std::string& name : names) {
+            const auto [it, fresh] = writer.emplace(lower(name), i);
+            if (!fresh)
+                throw UsageError("inputs '" + inputs[it->second] + "' and '" + inputs[i] +
+                                 "' would both write " +
+                                 (std::filesystem::path(command.output_dir) / name).string() +
+                                 "; render them into different folders");
+        }
+    }
+}
+
+/// Set by SIGINT/SIGTERM/SIGHUP: the run stops after the frame in progress, whose files are written
 /// whole. A second signal ends the process at once; files are renamed into place only when
 /// complete, so even then no truncated image exists under its final name.
 volatile std::sig_atomic_t interrupted = 0;
@@ -78,8 +110,13 @@ int run_render(const RenderCommand& command) {
     if (selected.empty())
         throw UsageError("--frames/--shard select no frame of the " +
                          std::to_string(inputs.size()) + " inputs");
+    check_output_names(inputs, selected, command);
     RenderSettings settings;
     if (!command.render_file.empty()) settings = load_render_file(command.render_file);
+    // Every frame's camera, interpolated between valid keys, must have a basis too: checked
+    // before the first frame costs time.
+    if (settings.camera_given)
+        for (const std::size_t i : selected) settings.camera_at(int(i));
     DeviceSession session(command.builder.device);
     const std::unique_ptr<TreeBuilder> builder =
         make_tree_builder(command.builder.builder, command.builder.params, session);
@@ -89,8 +126,8 @@ int run_render(const RenderCommand& command) {
     const std::filesystem::path out_dir = command.output_dir;
     create_output_dir(out_dir);
     const bool progress = !command.quiet && ::isatty(STDERR_FILENO);
-    std::signal(SIGINT, on_interrupt);
-    std::signal(SIGTERM, on_interrupt);
+    // A closed terminal or a killed ssh session (SIGHUP) stops the run as Ctrl-C does.
+    for (const int signal : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal, on_interrupt);
 
     if (command.warm_up) {
         // Benchmarks: the first frame once through the same pipeline, untimed and unwritten, so
@@ -156,7 +193,7 @@ int run_render(const RenderCommand& command) {
         {"summary", summarise_frames(frames)}};
     if (!failures.empty()) stats["failed_frames"] = failures;
     if (interrupted) stats["interrupted_after_frames"] = frames.size();
-    if (!frames.empty()) write_file_atomically(out_dir / "stats.json", stats.dump(2) + "\n");
+    if (!frames.empty()) write_file_atomically(out_dir / "stats.json", json_text(stats) + "\n");
 
     if (interrupted) {
         std::cerr << "kdray: interrupted: " << frames.size() << " frame(s) complete in "

@@ -10,6 +10,7 @@
 #include "cli/devices.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/input_file.h"
 #include "core/scene.h"
 #include "core/stats_json.h"
 #include "core/tree_file.h"
@@ -32,17 +33,31 @@ nlohmann::json defaults_json(const BuilderOptions& o) {
 }
 
 nlohmann::json read_render_stats(const std::filesystem::path& dir) {
-    std::filesystem::path file = dir / "stats.json";
-    std::ifstream in(file);
-    if (!in) throw Error(dir.string() + ": not a render output folder (no stats.json)");
+    const std::filesystem::path file = dir / "stats.json";
+    std::error_code ec;
+    if (!std::filesystem::exists(file, ec))
+        throw Error(dir.string() + ": not a render output folder (no stats.json)");
     nlohmann::json stats;
     try {
-        stats = nlohmann::json::parse(in);
+        stats = nlohmann::json::parse(read_input_file(file, "stats.json file"));
     } catch (const nlohmann::json::exception& e) {
         throw Error(file.string() + ": malformed JSON: " + e.what());
     }
-    if (!stats.contains("summary") || !stats.contains("frames") || !stats["frames"].is_array())
+    if (!stats.is_object() || !stats.contains("summary") || !stats.contains("frames") ||
+        !stats["frames"].is_array())
         throw Error(file.string() + ": not a kdray stats file (no summary or frames)");
+    // What the summary reads must be what kdray writes: a frame number that is a count, times
+    // that are numbers.
+    for (std::size_t k = 0; k < stats["frames"].size(); ++k) {
+        const nlohmann::json& frame = stats["frames"][k];
+        const std::string where = file.string() + ": frames[" + std::to_string(k) + "]";
+        if (!frame.is_object()) throw Error(where + " is not an object");
+        if (frame.contains("frame") && !frame["frame"].is_number_unsigned())
+            throw Error(where + ".frame is " + frame["frame"].dump() + ", not a frame number");
+        for (const char* key : {"frame_ms", "build_ms", "trace_ms"})
+            if (frame.contains(key) && !frame[key].is_number())
+                throw Error(where + "." + key + " is " + frame[key].dump() + ", not a number");
+    }
     return stats;
 }
 
@@ -95,7 +110,7 @@ int run_stats(const StatsCommand& command) {
         if (folders > 1) out["combined"] = summarise_frames(frames);
     }
     if (command.json) {
-        std::cout << out.dump(2) << "\n";
+        std::cout << json_text(out) << "\n";
     } else if (out.contains("items")) {
         for (const auto& item : out["items"]) print_table(std::cout, item);
         if (out.contains("combined")) print_table(std::cout, {{"combined", out["combined"]}});

@@ -28,8 +28,9 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& arguments
         ::globfree(&matches);
         if (status != 0) throw Error(arg + ": no file matches this pattern");
     }
-    std::sort(files.begin(), files.end(), natural_less);
-    files.erase(std::unique(files.begin(), files.end()), files.end());
+    // Sorted, duplicates kept: a path given twice keeps the frame numbers of its positions, and
+    // render refuses the two writers of one image by name (check_output_names).
+    std::stable_sort(files.begin(), files.end(), natural_less);
     return files;
 }
 

@@ -37,7 +37,7 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
                    "OpenCL builder: nodes with more triangles are 'large' (empty-space cuts, then "
                    "a binned-SAH or median split); the rest get the full SAH (Zhou et al.'s T, "
                    "at most 64)")
-        ->check(CLI::Range(0, 64))
+        ->check(CLI::Range(1, 64))
         ->capture_default_str();
     app.add_option("--empty-ratio", o.params.empty_space_ratio,
                    "OpenCL builder: cut off empty space larger than this share of a large "
@@ -152,6 +152,16 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
         // --help and --version are "errors" that succeed; every other one is a usage error.
         if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+        std::cerr << "kdray: error: " << e.what() << " (see kdray --help)\n";
+        return 2;
+    }
+
+    // CLI11's checks let nan through (every comparison with it is false) and a float option
+    // overflows to inf: the one parameter check decides, as a usage error.
+    try {
+        for (const BuilderOptions* o : {&build.builder, &render.builder, &stats.builder})
+            kdray::validate_build_params(o->params);
+    } catch (const kdray::Error& e) {
         std::cerr << "kdray: error: " << e.what() << " (see kdray --help)\n";
         return 2;
     }

@@ -1,10 +1,13 @@
 #include "core/atomic_file.h"
 
+#include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <charconv>
+#include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <string>
 #include <system_error>
 
@@ -14,20 +17,71 @@ namespace kdray {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+/// The longest file name most file systems hold (NAME_MAX on Linux).
+constexpr std::size_t kNameMax = 255;
+
+const char* kind_of(fs::file_type type) {
+    switch (type) {
+        case fs::file_type::directory:
+            return "a directory";
+        case fs::file_type::symlink:
+            return "a symbolic link";
+        case fs::file_type::block:
+            return "a block device";
+        case fs::file_type::character:
+            return "a character device";
+        case fs::file_type::fifo:
+            return "a FIFO";
+        case fs::file_type::socket:
+            return "a socket";
+        default:
+            return "not a regular file";
+    }
+}
+
+/// The process id in a temporary name made by temporary_path, or 0 when `name` is not one.
+long temporary_owner(const std::string& name) {
+    if (name.empty() || name[0] != '.') return 0;
+    const std::size_t at = name.rfind(".tmp");
+    if (at == std::string::npos || at == 0) return 0;
+    long pid = 0;
+    const char* begin = name.data() + at + 4;
+    const auto [end, ec] = std::from_chars(begin, name.data() + name.size(), pid);
+    if (ec != std::errc() || end == begin || (*end != '\0' && *end != '.')) return 0;
+    return pid;
+}
+
+}  // namespace
+
 fs::path temporary_path(const fs::path& path) {
     // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "." + std::string.
+    const std::string suffix = ".tmp" + std::to_string(::getpid()) + path.extension().string();
     std::string name = ".";
     name += path.filename().string();
-    name += ".tmp" + std::to_string(::getpid());
-    name += path.extension().string();
+    if (name.size() + suffix.size() > kNameMax) {
+        // A legal final name near the limit: a short stand-in that still says what it is for.
+        char hash[17];
+        std::snprintf(hash, sizeof hash, "%016zx", std::hash<std::string>{}(name));
+        name = ".kdray-";
+        name += hash;
+    }
+    name += suffix;
     return path.parent_path() / name;
 }
 
 void write_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+    // Only a regular file is ever replaced: a device node, a FIFO, a directory or a symbolic
+    // link where the output should go is the user's, and renaming over it would destroy it.
+    std::error_code ec;
+    const fs::file_status existing = fs::symlink_status(path, ec);
+    if (fs::exists(existing) && !fs::is_regular_file(existing))
+        throw Error(path.string() + ": exists and is " + kind_of(existing.type()) +
+                    "; kdray replaces only regular files");
     const fs::path temp = temporary_path(path);
     try {
         write(temp);
-        std::error_code ec;
         fs::rename(temp, path, ec);
         if (ec)
             throw Error(path.string() +
@@ -41,12 +95,38 @@ void write_atomically(const fs::path& path, const std::function<void(const fs::p
 
 void write_file_atomically(const fs::path& path, std::string_view bytes) {
     write_atomically(path, [&](const fs::path& temp) {
-        std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-        if (!out) throw Error(path.string() + ": cannot write: " + std::strerror(errno));
-        out.write(bytes.data(), std::streamsize(bytes.size()));
-        out.flush();
-        if (!out) throw Error(path.string() + ": write failed: " + std::strerror(errno));
+        // O_EXCL|O_NOFOLLOW: the temporary is new, never something already there or a link.
+        const int fd =
+            ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+        if (fd < 0) throw Error(path.string() + ": cannot write: " + std::strerror(errno));
+        std::size_t done = 0;
+        while (done < bytes.size()) {
+            const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+            if (n < 0 && errno == EINTR) continue;
+            if (n < 0) {
+                const int error = errno;
+                ::close(fd);
+                throw Error(path.string() + ": write failed: " + std::strerror(error));
+            }
+            done += std::size_t(n);
+        }
+        // close() is where some file systems (NFS, full quotas) report a failed write.
+        if (::close(fd) != 0)
+            throw Error(path.string() + ": write failed: " + std::strerror(errno));
     });
+}
+
+void remove_stale_temporaries(const fs::path& dir) {
+    std::error_code ec;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        const long owner = temporary_owner(name);
+        if (owner <= 0 || owner == long(::getpid())) continue;
+        // A process that still runs may be writing it (another kdray into the same folder).
+        if (::kill(pid_t(owner), 0) == 0 || errno != ESRCH) continue;
+        std::error_code ignored;
+        if (it->is_regular_file(ignored)) fs::remove(it->path(), ignored);
+    }
 }
 
 }  // namespace kdray

@@ -17,11 +17,18 @@ std::filesystem::path temporary_path(const std::filesystem::path& path);
 
 /// Calls `write` with the temporary name of `path`; `write` creates and fills that file and
 /// throws Error when it cannot. Then the file is renamed onto `path`. On any failure the
-/// temporary file is removed and the Error propagates.
+/// temporary file is removed and the Error propagates. A `path` that exists and is not a regular
+/// file (a device node, a FIFO, a directory, a symbolic link) is refused before anything is
+/// written. Names too long for the temporary suffix get a shorter, hashed temporary name.
 void write_atomically(const std::filesystem::path& path,
                       const std::function<void(const std::filesystem::path& temp)>& write);
 
-/// `bytes` as the whole content of `path`, atomically.
+/// `bytes` as the whole content of `path`, atomically; every write and the close are checked
+/// (a full disk fails here, before the rename).
 void write_file_atomically(const std::filesystem::path& path, std::string_view bytes);
+
+/// Removes the temporary files that a kdray process killed mid-write (SIGKILL, a power cut) left
+/// in `dir`: hidden files named by temporary_path whose process no longer runs.
+void remove_stale_temporaries(const std::filesystem::path& dir);
 
 }  // namespace kdray

@@ -46,7 +46,15 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
     const std::filesystem::path aov_path = options_.out_dir / (stem + ".aov.exr");
     if (output == Output::Write) {
         write_image(image_path, result.image);
-        if (options_.aov) write_aov(aov_path, result.hits);
+        try {
+            if (options_.aov) write_aov(aov_path, result.hits);
+        } catch (const Error&) {
+            // A frame is its image and its AOV: one without the other is a failed frame, and
+            // it leaves neither (a full disk, say).
+            std::error_code ignored;
+            std::filesystem::remove(image_path, ignored);
+            throw;
+        }
         ++written_;
     }
 

@@ -3,6 +3,7 @@
 // a failed write leaves nothing behind.
 #include "core/image.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <functional>
 #include <string>
 #include <system_error>
+#include <vector>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -29,24 +31,31 @@ std::string lower_extension(const fs::path& path) {
     return ext;
 }
 
-/// Writes `spec` to `path` through OpenImageIO, atomically (core/atomic_file.h): `write` fills
-/// the opened file. An Error names `path` and OIIO's message.
+/// Writes `spec` to `path` through OpenImageIO: the file is encoded in memory (`write` fills the
+/// opened image), then written atomically with every write checked (core/atomic_file.h), since
+/// OpenImageIO's PNG writer does not report a write that a full disk cut short. An Error names
+/// `path` and OIIO's message.
 void write_image_file(const fs::path& path, const OIIO::ImageSpec& spec,
                       const std::function<bool(OIIO::ImageOutput&)>& write) {
-    write_atomically(path, [&](const fs::path& temp) {
-        auto fail = [&](const std::string& why) {
-            throw Error("cannot write " + path.string() + ": " + why);
-        };
-        auto out = OIIO::ImageOutput::create(temp.string());
+    auto fail = [&](const std::string& why) {
+        throw Error("cannot write " + path.string() + ": " + why);
+    };
+    std::vector<unsigned char> encoded;
+    {
+        OIIO::Filesystem::IOVecOutput memory(encoded);
+        // The format comes from the file name's extension, as for a file on disk.
+        auto out = OIIO::ImageOutput::create(path.string(), &memory);
         if (!out) fail(OIIO::geterror());
-        if (!out->open(temp.string(), spec)) fail(out->geterror());
+        if (!out->open(path.string(), spec)) fail(out->geterror());
         if (!write(*out)) {
             std::string why = out->geterror();
             out->close();
             fail(why);
         }
         if (!out->close()) fail(out->geterror());
-    });
+    }
+    write_file_atomically(
+        path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()));
 }
 
 /// The sRGB transfer function (IEC 61966-2-1) of a linear value, clamped to [0, 1] first; NaN

@@ -41,6 +41,13 @@ struct BuildParams {
     int max_depth = KDRAY_MAX_DEPTH;
 };
 
+/// Throws Error naming the parameter (and the command-line option that sets it) when `params`
+/// is outside what the builders support: C_t finite >= 0, C_i finite > 0, empty_bonus in [0, 1),
+/// large_node_threshold in [1, 64] (the small stage's 64-bit masks), empty_space_ratio in [0, 1],
+/// large_split_bins in [0, kMaxLargeSplitBins], max_depth in [0, KDRAY_MAX_DEPTH]. NaN fails every
+/// test. The one check of every builder, the command line and tree files read back.
+void validate_build_params(const BuildParams& params);
+
 /// What a build reports about itself beyond the tree: per-stage wall times in the order the stages
 /// ran (e.g. upload, aabbs, large_nodes, small_nodes, output, download), level counts, and the
 /// device memory it held at its peak. The tree's own figures come from compute_tree_stats.

@@ -4,7 +4,6 @@
 // Debian's tinyobjloader would silently get wrong; then tinyobjloader parses the same bytes with
 // triangulate = true, and the triangles are numbered in the order it lists them, shape by shape,
 // face by face, as conventions.md requires.
-#include <sys/stat.h>
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
@@ -14,38 +13,20 @@
 #include <cstring>
 #include <fstream>
 #include <istream>
+#include <map>
 #include <memory>
 #include <set>
 #include <streambuf>
 #include <string_view>
 
 #include "core/error.h"
+#include "core/input_file.h"
+#include "core/mtl_validate.h"
 #include "core/obj_validate.h"
 #include "core/scene.h"
 
 namespace kdray {
 namespace {
-
-/// The whole file in memory; Error "FILE: cannot open: <reason>" when it cannot be read.
-std::string read_whole_file(const std::filesystem::path& path) {
-    const std::string name = path.string();
-    std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(name.c_str(), "rb"),
-                                                         &std::fclose);
-    if (!file) throw Error(name + ": cannot open: " + std::strerror(errno));
-    std::string text;
-    struct stat info {};
-    if (::fstat(fileno(file.get()), &info) == 0 && S_ISREG(info.st_mode))
-        text.reserve(static_cast<std::size_t>(info.st_size));
-    char buffer[1 << 16];
-    for (;;) {
-        const std::size_t n = std::fread(buffer, 1, sizeof buffer, file.get());
-        text.append(buffer, n);
-        if (n < sizeof buffer) break;
-    }
-    // A directory opens on Linux, and fails only on the read (EISDIR).
-    if (std::ferror(file.get())) throw Error(name + ": cannot open: " + std::strerror(errno));
-    return text;
-}
 
 /// A read-only stream over bytes already in memory (no copy of a file of tens of megabytes).
 class MemoryStreamBuffer : public std::streambuf {
@@ -63,14 +44,50 @@ struct ParsedObj {
     std::string warnings;
 };
 
-/// tinyobjloader's parse of the OBJ text `text` of file `name`: what ObjReader::ParseFromFile
-/// does (triangulate, no vertex colours, MTL libraries looked up in the OBJ's folder), from the
-/// bytes in memory instead of a second read of the file.
-ParsedObj parse_obj_text(std::string_view text, const std::string& name) {
-    std::string mtl_folder;
-    if (const std::size_t slash = name.find_last_of('/'); slash != std::string::npos)
-        mtl_folder = name.substr(0, slash + 1);
-    tinyobj::MaterialFileReader mtl_reader(mtl_folder);
+/// Where an `mtllib` name points: an absolute name is itself, a relative one is in the OBJ's
+/// folder (tinyobjloader's own reader would join even an absolute name onto the folder).
+std::filesystem::path library_path(const std::filesystem::path& obj_folder,
+                                   const std::string& name) {
+    const std::filesystem::path library(name);
+    return library.is_absolute() ? library : obj_folder / library;
+}
+
+/// The MTL libraries as kdray reads every input (input_file.h: regular files only, bounded)
+/// and pre-scans them (mtl_validate.h) before tinyobjloader's LoadMtl parses the same bytes. A
+/// library that does not exist is not loaded (load_obj has warned about it, with its line).
+class MtlLibraryReader : public tinyobj::MaterialReader {
+  public:
+    explicit MtlLibraryReader(std::filesystem::path obj_folder) : folder_(std::move(obj_folder)) {}
+
+    bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                    std::map<std::string, int>* material_map, std::string* warn,
+                    std::string* err) override {
+        const std::filesystem::path path = library_path(folder_, name);
+        std::error_code ec;
+        if (!std::filesystem::exists(path, ec)) {
+            if (warn) *warn += "Material file [ " + name + " ] not found\n";
+            return false;
+        }
+        const std::string text = read_input_file(path, "MTL file", kMtlSizeLimit);
+        validate_mtl(text, path.string());
+        MemoryStreamBuffer buffer(text);
+        std::istream in(&buffer);
+        tinyobj::LoadMtl(material_map, materials, &in, warn, err);
+        return true;
+    }
+
+  private:
+    // Material libraries are a few kilobytes; 256 MiB is far past any real one.
+    static constexpr std::uint64_t kMtlSizeLimit = std::uint64_t(256) << 20;
+    std::filesystem::path folder_;
+};
+
+/// tinyobjloader's parse of the OBJ text `text` of file `path`: what ObjReader::ParseFromFile
+/// does (triangulate, no vertex colours), from the bytes in memory instead of a second read of
+/// the file, with the MTL libraries read by MtlLibraryReader.
+ParsedObj parse_obj_text(std::string_view text, const std::filesystem::path& path) {
+    const std::string name = path.string();
+    MtlLibraryReader mtl_reader(path.parent_path());
     MemoryStreamBuffer buffer(text);
     std::istream in(&buffer);
     ParsedObj obj;
@@ -180,7 +197,7 @@ Scene load_obj(const std::filesystem::path& path) {
     const std::string name = path.string();
 
     // Pre-scan: everything tinyobjloader would silently accept must fail here, with a line.
-    const std::string text = read_whole_file(path);
+    const std::string text = read_input_file(path, "OBJ file");
     const ObjPrescan prescan = validate_obj(text, name);
 
     Scene scene;
@@ -190,22 +207,35 @@ Scene load_obj(const std::filesystem::path& path) {
     // tinyobjloader looks them up beside the OBJ file, and so does this check.
     bool library_missing = false;
     for (const MtlReference& library : prescan.material_libraries) {
-        const std::filesystem::path candidate = path.parent_path() / library.name;
-        if (!std::ifstream(candidate)) {
+        const std::filesystem::path candidate = library_path(path.parent_path(), library.name);
+        const std::string where =
+            name + ":" + std::to_string(library.line) + ": material library '" + library.name + "'";
+        std::error_code ec;
+        const std::filesystem::file_status status = std::filesystem::status(candidate, ec);
+        if (!std::filesystem::exists(status)) {
             library_missing = true;
-            scene.warnings.push_back(name + ":" + std::to_string(library.line) +
-                                     ": material library '" + library.name +
-                                     "' not found; using a grey default material");
+            scene.warnings.push_back(where + " not found; using a grey default material");
+        } else if (!std::filesystem::is_regular_file(status)) {
+            throw Error(where + " (" + candidate.string() + ") is not a regular file");
         }
     }
 
     // tinyobjloader parses the bytes the pre-scan read (one read of the file per load), as its
     // ObjReader::ParseFromFile would parse the file: triangulated, MTL files beside the OBJ.
-    const ParsedObj obj = parse_obj_text(text, name);
+    const ParsedObj obj = parse_obj_text(text, path);
     for (std::string& w : convert_warnings(obj.warnings, name, library_missing))
         scene.warnings.push_back(std::move(w));
 
-    for (const tinyobj::material_t& m : obj.materials) scene.materials.push_back(to_material(m));
+    for (const tinyobj::material_t& m : obj.materials) {
+        scene.materials.push_back(to_material(m));
+        const Material& material = scene.materials.back();
+        // BART writes Ni 0 for opaque materials, and for some that transmit (the Robots' m49);
+        // those refract with Ni 1, which bends nothing: said, not silent.
+        if (material.transmits() && !(material.ior > 0.0f))
+            scene.warnings.push_back(name + ": material '" + material.name +
+                                     "' transmits light but has no index of refraction (Ni " +
+                                     std::to_string(material.ior) + "); it refracts with Ni 1");
+    }
     const auto default_material = static_cast<kd_u32>(scene.materials.size());
     bool default_needed = false;
 

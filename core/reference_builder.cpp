@@ -22,20 +22,6 @@ namespace {
 /// Where a triangle goes when its node is split (paper Sec. 5.3, "classification").
 enum class Side : std::uint8_t { Both, LeftOnly, RightOnly };
 
-void validate_params(const BuildParams& params) {
-    if (params.max_depth < 0 || params.max_depth > KDRAY_MAX_DEPTH)
-        throw Error("build_reference: max_depth " + std::to_string(params.max_depth) +
-                    " is outside [0, " + std::to_string(KDRAY_MAX_DEPTH) + "]");
-    if (!(params.costs.traversal >= 0) || !std::isfinite(params.costs.traversal) ||
-        !(params.costs.intersection > 0) || !std::isfinite(params.costs.intersection))
-        throw Error("build_reference: SAH costs C_t = " + std::to_string(params.costs.traversal) +
-                    ", C_i = " + std::to_string(params.costs.intersection) +
-                    " must be finite, C_t >= 0 and C_i > 0");
-    if (!(params.empty_bonus >= 0 && params.empty_bonus < 1))
-        throw Error("build_reference: empty_bonus " + std::to_string(params.empty_bonus) +
-                    " is outside [0, 1)");
-}
-
 /// Number of distinct triangles in an event list: each has exactly one start or planar event.
 std::size_t count_triangles(const std::vector<SplitEvent>& list) {
     return static_cast<std::size_t>(std::count_if(
@@ -215,7 +201,7 @@ class ReferenceBuilder {
 }  // namespace
 
 KdTree build_reference(const Scene& scene, const BuildParams& params) {
-    validate_params(params);
+    validate_build_params(params);
     if (scene.triangle_count() > KDRAY_MAX_OFFSET)
         throw Error("build_reference: " + scene.path.string() + " has " +
                     std::to_string(scene.triangle_count()) +

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string_view>
 
@@ -20,6 +21,7 @@
 
 #include "core/camera.h"
 #include "core/error.h"
+#include "core/input_file.h"
 
 namespace kdray {
 namespace {
@@ -30,6 +32,52 @@ using nlohmann::json;
 constexpr long long kMaxImageSize = 65536;
 constexpr long long kMaxSpp = 65536;
 constexpr long long kMaxDepth = 1024;
+
+bool finite(const Vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+/// True when `v` normalises to a finite unit vector in float: its squared length neither
+/// overflows nor underflows to zero.
+bool normalizable(const Vec3& v) {
+    const float squared = dot(v, v);
+    return finite(v) && squared > 0.0f && std::isfinite(squared);
+}
+
+/// What is wrong with a camera's basis, if anything: the field to blame and the problem.
+struct CameraProblem {
+    const char* field;
+    std::string what;
+};
+
+/// The basis of conventions.md's camera model must exist: a view direction and an up vector that
+/// is not along it, in 32-bit floats. Checked for every key of a render file and for every
+/// frame's interpolated camera, which two valid keys can still make degenerate.
+std::optional<CameraProblem> camera_basis_problem(const Camera& camera) {
+    const Vec3 view = camera.look_at - camera.position;
+    if (view == Vec3{0, 0, 0})
+        return CameraProblem{"look_at", "must differ from the camera position"};
+    // Finite coordinates can still give no basis in float: look_at - position may overflow
+    // (-3e38 to 3e38), and a vector whose squared length overflows or underflows normalises
+    // to NaN or 0. Every such camera rendered an image of NaN rays without a word.
+    if (!normalizable(view))
+        return CameraProblem{"look_at",
+                             "is too far from or too close to the camera position: look_at - "
+                             "position cannot be normalised in 32-bit floats"};
+    if (camera.up == Vec3{0, 0, 0}) return CameraProblem{"up", "must not be the zero vector"};
+    if (!normalizable(camera.up))
+        return CameraProblem{"up", "is too long or too short to be normalised in 32-bit floats"};
+    // `!(... >= ...)` so that a NaN can never pass.
+    if (!(length(cross(normalize(view), normalize(camera.up))) >= 1e-6f))
+        return CameraProblem{"up", "is parallel to the view direction (look_at - position)"};
+    // The basis exactly as the camera computes it (camera.cpp), which must be finite.
+    const CameraRays rays(camera, 1, 1);
+    if (!finite(rays.forward) || !finite(rays.right) || !finite(rays.up))
+        return CameraProblem{"up",
+                             "gives no camera basis in 32-bit floats with this view direction; "
+                             "scale up and look_at - position to ordinary lengths"};
+    return std::nullopt;
+}
 
 class RenderFileParser {
   public:
@@ -119,17 +167,6 @@ class RenderFileParser {
         return static_cast<int>(v);
     }
 
-    static bool finite(const Vec3& v) {
-        return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-    }
-
-    /// True when `v` normalises to a finite unit vector in float: its squared length neither
-    /// overflows nor underflows to zero.
-    static bool normalizable(const Vec3& v) {
-        const float squared = dot(v, v);
-        return finite(v) && squared > 0.0f && std::isfinite(squared);
-    }
-
     Vec3 vec3(const json& value, const std::string& path) const {
         if (!value.is_array() || value.size() != 3) fail(path, "must be an array of 3 numbers");
         return {number(value[0], path + "[0]"), number(value[1], path + "[1]"),
@@ -156,30 +193,8 @@ class RenderFileParser {
             if (!(camera.fov_y > 0.0f && camera.fov_y < 180.0f))
                 fail(join(path, "fov_y"), "must be between 0 and 180 degrees, exclusive");
         }
-        // The basis of conventions.md's camera model must exist: a view direction and an up
-        // vector that is not along it.
-        const Vec3 view = camera.look_at - camera.position;
-        if (view == Vec3{0, 0, 0})
-            fail(join(path, "look_at"), "must differ from the camera position");
-        // Finite coordinates can still give no basis in float: look_at - position may overflow
-        // (-3e38 to 3e38), and a vector whose squared length overflows or underflows normalises
-        // to NaN or 0. Every such camera rendered an image of NaN rays without a word.
-        if (!normalizable(view))
-            fail(join(path, "look_at"),
-                 "is too far from or too close to the camera position: look_at - position "
-                 "cannot be normalised in 32-bit floats");
-        if (camera.up == Vec3{0, 0, 0}) fail(join(path, "up"), "must not be the zero vector");
-        if (!normalizable(camera.up))
-            fail(join(path, "up"), "is too long or too short to be normalised in 32-bit floats");
-        // `!(... >= ...)` so that a NaN can never pass.
-        if (!(length(cross(normalize(view), normalize(camera.up))) >= 1e-6f))
-            fail(join(path, "up"), "is parallel to the view direction (look_at - position)");
-        // The basis exactly as the camera computes it (camera.cpp), which must be finite.
-        const CameraRays rays(camera, 1, 1);
-        if (!finite(rays.forward) || !finite(rays.right) || !finite(rays.up))
-            fail(join(path, "up"),
-                 "gives no camera basis in 32-bit floats with this view direction; scale up "
-                 "and look_at - position to ordinary lengths");
+        if (const auto problem = camera_basis_problem(camera))
+            fail(join(path, problem->field), problem->what);
         return camera;
     }
 
@@ -288,6 +303,10 @@ Camera RenderSettings::camera_at(int frame) const {
     c.look_at = lerp(a.camera.look_at, b.camera.look_at, t);
     c.up = lerp(a.camera.up, b.camera.up, t);
     c.fov_y = a.camera.fov_y + (b.camera.fov_y - a.camera.fov_y) * t;
+    if (const auto problem = camera_basis_problem(c))
+        throw Error(path.string() + ": the camera of frame " + std::to_string(frame) +
+                    ", between the keys of frames " + std::to_string(a.frame) + " and " +
+                    std::to_string(b.frame) + ": its " + problem->field + " " + problem->what);
     return c;
 }
 
@@ -298,15 +317,9 @@ RenderSettings parse_render_json(const std::string& text, const std::filesystem:
 }
 
 RenderSettings load_render_file(const std::filesystem::path& path) {
-    // A directory opens as a stream on Linux and only fails on reading; say so plainly.
-    if (std::error_code ec; std::filesystem::is_directory(path, ec))
-        throw Error(path.string() + ": cannot open: " + std::strerror(EISDIR));
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(path.string() + ": cannot open: " + std::strerror(errno));
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) throw Error(path.string() + ": cannot read: " + std::strerror(errno));
-    return parse_render_json(text.str(), path);
+    // Render files are a few kilobytes (a long keyframed camera, a few hundred); 64 MiB is far
+    // past any real one.
+    return parse_render_json(read_input_file(path, "render file", std::uint64_t(64) << 20), path);
 }
 
 }  // namespace kdray

@@ -72,4 +72,8 @@ nlohmann::json summarise_frames(const nlohmann::json& frames) {
     return j;
 }
 
+std::string json_text(const nlohmann::json& json) {
+    return json.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 }  // namespace kdray

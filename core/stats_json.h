@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 
 #include <nlohmann/json.hpp>
 
@@ -19,5 +20,9 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count);
 /// folders, the shards of one animation): frames, mean and worst frame_ms, mean build_ms and
 /// trace_ms, frames per second, the frame numbers sorted, and a warning when one appears twice.
 nlohmann::json summarise_frames(const nlohmann::json& frames);
+
+/// `json` as kdray prints and writes it (indented by 2). Text that is not UTF-8 (a file name of
+/// Latin-1 bytes, say) is written with U+FFFD in place of the bad bytes instead of failing.
+std::string json_text(const nlohmann::json& json);
 
 }  // namespace kdray

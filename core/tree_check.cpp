@@ -47,13 +47,17 @@ Polygon clip_half_space(const Polygon& poly, int axis, double pos, bool keep_abo
 
 class TreeChecker {
   public:
-    TreeChecker(const KdTree& tree, const Scene& scene, int limit)
-        : tree_(tree), scene_(scene), limit_(static_cast<std::size_t>(std::max(limit, 1))) {}
+    /// scene: null for the layout checks alone, against a scene of `triangle_count` triangles.
+    TreeChecker(const KdTree& tree, const Scene* scene, std::size_t triangle_count, int limit)
+        : tree_(tree),
+          scene_(scene),
+          triangle_count_(triangle_count),
+          limit_(static_cast<std::size_t>(std::max(limit, 1))) {}
 
     std::vector<std::string> run() {
         check_layout();
         // Coverage walks the tree by its offsets, which is only safe once the layout is sound.
-        if (errors_.empty()) check_coverage();
+        if (errors_.empty() && scene_) check_coverage();
         return std::move(errors_);
     }
 
@@ -77,7 +81,17 @@ class TreeChecker {
         if (tree_.nodes.size() - 1 > KDRAY_MAX_OFFSET)
             fail("the tree has " + std::to_string(tree_.nodes.size()) +
                  " nodes, more than 30-bit offsets address");
-        const Aabb scene_bounds = scene_.bounds();
+        // An empty scene's tree keeps the empty box (lo = +inf, hi = -inf); any other must be
+        // a finite box.
+        const Aabb empty_box;
+        const bool empty_tree = tree_.bounds.lo == empty_box.lo && tree_.bounds.hi == empty_box.hi;
+        for (int a = 0; a < 3 && !empty_tree; ++a)
+            if (!(std::isfinite(tree_.bounds.lo[a]) && std::isfinite(tree_.bounds.hi[a]) &&
+                  tree_.bounds.lo[a] <= tree_.bounds.hi[a])) {
+                fail("tree bounds " + box_string(tree_.bounds) + " are not a finite box");
+                return;
+            }
+        const Aabb scene_bounds = scene_ ? scene_->bounds() : Aabb{};
         if (!scene_bounds.empty() && !tree_.bounds.contains(scene_bounds))
             fail("tree bounds " + box_string(tree_.bounds) + " do not contain the scene bounds " +
                  box_string(scene_bounds));
@@ -160,10 +174,10 @@ class TreeChecker {
         }
         for (std::uint64_t i = offset; i < offset + count; ++i) {
             entry_used[i] = true;
-            if (tree_.leaf_indices[i] >= scene_.triangle_count())
+            if (tree_.leaf_indices[i] >= triangle_count_)
                 fail("leaf " + std::to_string(index) + " lists triangle " +
                      std::to_string(tree_.leaf_indices[i]) + " of a scene of " +
-                     std::to_string(scene_.triangle_count()));
+                     std::to_string(triangle_count_));
         }
     }
 
@@ -171,7 +185,7 @@ class TreeChecker {
 
     void check_coverage() {
         // For every triangle, the leaves that list it, sorted (compressed rows).
-        const std::size_t triangle_count = scene_.triangle_count();
+        const std::size_t triangle_count = triangle_count_;
         std::vector<std::size_t> first(triangle_count + 1, 0);
         for_each_leaf([&](std::size_t, kd_u32 t) { ++first[t + 1]; });
         for (std::size_t t = 0; t < triangle_count; ++t) first[t + 1] += first[t];
@@ -195,7 +209,7 @@ class TreeChecker {
         for (std::size_t t = 0; t < triangle_count && !full(); ++t) {
             Polygon poly;
             for (int corner = 0; corner < 3; ++corner) {
-                const Vec3 v = scene_.vertex(t, corner);
+                const Vec3 v = scene_->vertex(t, corner);
                 poly.push_back({v.x, v.y, v.z});
             }
             std::size_t missing = 0;
@@ -267,7 +281,8 @@ class TreeChecker {
     }
 
     const KdTree& tree_;
-    const Scene& scene_;
+    const Scene* scene_;
+    std::size_t triangle_count_;
     std::size_t limit_;
     std::vector<std::string> errors_;
     std::vector<std::size_t> leaves_of_start_;
@@ -279,7 +294,12 @@ class TreeChecker {
 }  // namespace
 
 std::vector<std::string> check_tree(const KdTree& tree, const Scene& scene, int limit) {
-    return TreeChecker(tree, scene, limit).run();
+    return TreeChecker(tree, &scene, scene.triangle_count(), limit).run();
+}
+
+std::vector<std::string> check_tree_layout(const KdTree& tree, std::size_t triangle_count,
+                                           int limit) {
+    return TreeChecker(tree, nullptr, triangle_count, limit).run();
 }
 
 }  // namespace kdray

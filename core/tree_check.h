@@ -4,6 +4,7 @@
 // every leaf whose box its clipped part overlaps.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -14,5 +15,11 @@ namespace kdray {
 
 /// Every violated invariant, one line each (empty when the tree is sound). Stops after `limit`.
 std::vector<std::string> check_tree(const KdTree& tree, const Scene& scene, int limit = 20);
+
+/// The layout checks alone (no scene at hand: a tree file read back), against a scene of
+/// `triangle_count` triangles: offsets and leaf lists in range, preorder, depth, splits inside
+/// their boxes, finite bounds.
+std::vector<std::string> check_tree_layout(const KdTree& tree, std::size_t triangle_count,
+                                           int limit = 20);
 
 }  // namespace kdray

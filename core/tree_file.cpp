@@ -3,10 +3,13 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <string_view>
 #include <vector>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/input_file.h"
+#include "core/tree_check.h"
 
 namespace kdray {
 namespace {
@@ -77,16 +80,21 @@ class Reader {
     std::size_t at_ = 0;
 };
 
-}  // namespace
-
-std::uint64_t scene_hash(const Scene& scene) {
+/// FNV-1a, 64 bits: the scene hash, and the checksum that ends a tree file.
+std::uint64_t fnv1a(std::string_view bytes) {
     std::uint64_t h = 14695981039346656037ull;
-    const auto* p = reinterpret_cast<const unsigned char*>(scene.triangles.data());
-    for (std::size_t i = 0; i < scene.triangles.size() * sizeof(float); ++i) {
-        h ^= p[i];
+    for (const char c : bytes) {
+        h ^= static_cast<unsigned char>(c);
         h *= 1099511628211ull;
     }
     return h;
+}
+
+}  // namespace
+
+std::uint64_t scene_hash(const Scene& scene) {
+    return fnv1a({reinterpret_cast<const char*>(scene.triangles.data()),
+                  scene.triangles.size() * sizeof(float)});
 }
 
 void write_tree_file(const std::filesystem::path& path, const KdTree& tree, const Scene& scene) {
@@ -109,21 +117,33 @@ void write_tree_file(const std::filesystem::path& path, const KdTree& tree, cons
     for (int a = 0; a < 3; ++a) w.put(tree.bounds.hi[a]);
     w.put_array(tree.nodes);
     w.put_array(tree.leaf_indices);
+    w.put(fnv1a(w.bytes()));
     write_file_atomically(path, w.bytes());
 }
 
 TreeFile read_tree_file(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(path.string() + ": cannot open kd-tree file");
-    std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0)
+    const std::string text = read_input_file(path, "kd-tree file");
+    if (text.size() < sizeof(kMagic) || std::memcmp(text.data(), kMagic, sizeof(kMagic)) != 0)
         throw Error(path.string() + ": not a kdray kd-tree file");
-    Reader r(std::move(bytes), path.string());
-    for (std::size_t i = 0; i < sizeof(kMagic); ++i) r.get<char>();
-    auto version = r.get<std::uint32_t>();
-    if (version != kTreeFileVersion)
-        throw Error(path.string() + ": kd-tree file version " + std::to_string(version) +
+    // The version comes first, so that an older file is named as such rather than as corrupt.
+    std::uint32_t file_version = 0;
+    if (text.size() >= sizeof(kMagic) + sizeof(file_version))
+        std::memcpy(&file_version, text.data() + sizeof(kMagic), sizeof(file_version));
+    if (file_version != kTreeFileVersion)
+        throw Error(path.string() + ": kd-tree file version " + std::to_string(file_version) +
                     ", this kdray reads version " + std::to_string(kTreeFileVersion));
+    std::uint64_t checksum = 0;
+    if (text.size() < sizeof(kMagic) + sizeof(file_version) + sizeof(checksum))
+        throw Error(path.string() + ": kd-tree file is truncated");
+    const std::string_view body(text.data(), text.size() - sizeof(checksum));
+    std::memcpy(&checksum, text.data() + body.size(), sizeof(checksum));
+    if (checksum != fnv1a(body))
+        throw Error(path.string() + ": kd-tree file is corrupt (its checksum does not match)");
+    std::vector<char> bytes(body.begin(), body.end());
+    Reader r(std::move(bytes), path.string());
+    // Magic and version, checked above.
+    for (std::size_t i = 0; i < sizeof(kMagic); ++i) r.get<char>();
+    r.get<std::uint32_t>();
     TreeFile f;
     f.scene_path = r.get_string();
     f.scene_triangles = r.get<std::uint64_t>();
@@ -142,6 +162,18 @@ TreeFile read_tree_file(const std::filesystem::path& path) {
     f.tree.nodes = r.get_array<KdNode>();
     f.tree.leaf_indices = r.get_array<kd_u32>();
     if (!r.at_end()) throw Error(path.string() + ": kd-tree file has trailing bytes");
+    // A sound checksum says the bytes are the ones written; what was written must still be a
+    // tree kdray can use: parameters the builders accept, every offset and index in range.
+    try {
+        validate_build_params(p);
+    } catch (const Error& e) {
+        throw Error(path.string() + ": kd-tree file: " + e.what());
+    }
+    if (f.tree.builder != "opencl" && f.tree.builder != "reference")
+        throw Error(path.string() + ": kd-tree file names an unknown builder");
+    const std::vector<std::string> problems = check_tree_layout(f.tree, f.scene_triangles, 1);
+    if (!problems.empty())
+        throw Error(path.string() + ": kd-tree file holds an invalid tree: " + problems.front());
     return f;
 }
 

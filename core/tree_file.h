@@ -12,7 +12,8 @@
 
 namespace kdray {
 
-inline constexpr std::uint32_t kTreeFileVersion = 2;
+/// 3: a checksum (FNV-1a of every byte before it) ends the file.
+inline constexpr std::uint32_t kTreeFileVersion = 3;
 
 struct TreeFile {
     KdTree tree;
@@ -25,7 +26,9 @@ struct TreeFile {
 std::uint64_t scene_hash(const Scene& scene);
 
 void write_tree_file(const std::filesystem::path& path, const KdTree& tree, const Scene& scene);
-/// Throws Error naming the file when it is not a kdray tree, of another version, or truncated.
+/// Throws Error naming the file when it is not a kdray tree, of another version, truncated,
+/// corrupt (checksum), or holds parameters or a tree layout kdray would not build (every node
+/// offset and leaf index is checked).
 TreeFile read_tree_file(const std::filesystem::path& path);
 
 }  // namespace kdray

@@ -198,9 +198,10 @@ std::string read_file(const std::filesystem::path& path) {
 
 }  // namespace
 
-CommandResult run_kdray(const std::vector<std::string>& args) {
+CommandResult run_kdray(const std::vector<std::string>& args, int timeout_s) {
     std::filesystem::path dir = fresh_temp_dir("run");
-    std::string command = shell_quote(KDRAY_BINARY);
+    std::string command = timeout_s > 0 ? "timeout -s KILL " + std::to_string(timeout_s) + " " : "";
+    command += shell_quote(KDRAY_BINARY);
     for (const std::string& a : args) command += " " + shell_quote(a);
     command += " >" + shell_quote((dir / "out").string()) + " 2>" +
                shell_quote((dir / "err").string()) + " </dev/null";

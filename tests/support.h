@@ -58,8 +58,10 @@ struct CommandResult {
     int status = -1;
     std::string out, err;
 };
-/// Runs the kdray binary built beside the tests with `args` (no shell expansion of them).
-CommandResult run_kdray(const std::vector<std::string>& args);
+/// Runs the kdray binary built beside the tests with `args` (no shell expansion of them). With
+/// `timeout_s` > 0 a run that outlasts it is killed (status 137): a test of a hang fails, not
+/// hangs.
+CommandResult run_kdray(const std::vector<std::string>& args, int timeout_s = 0);
 
 /// A fresh, empty folder for one test, under the system's temporary folder.
 std::filesystem::path fresh_temp_dir(const std::string& name);

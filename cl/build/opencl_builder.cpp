@@ -43,14 +43,14 @@ class StageClock {
     std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
-/// The parameters a build uses: `params` with each bounded to what the builder supports (the
+/// The parameters a build uses: `params`, once checked against what the builder supports (the
 /// depth that sizes the traversal stack, the masks' 64 bits, the bins' private arrays).
 BuildParams supported_params(const BuildParams& params) {
-    BuildParams p = params;
-    p.max_depth = std::clamp(params.max_depth, 0, KDRAY_MAX_DEPTH);
-    p.large_node_threshold = std::clamp(params.large_node_threshold, 1, KDRAY_SMALL_ROOT_MAX_REFS);
-    p.large_split_bins = std::clamp(params.large_split_bins, 0, kMaxLargeSplitBins);
-    return p;
+    // Parameters out of range are an error, not silently clamped (validate_build_params names
+    // the one that is off); the small stage's masks bound the large-node threshold.
+    validate_build_params(params);
+    static_assert(KDRAY_SMALL_ROOT_MAX_REFS == 64, "validate_build_params bounds T by 64");
+    return params;
 }
 
 /// One build's stages and their records, in the order the stages make them. The destructor

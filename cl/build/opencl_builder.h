@@ -17,8 +17,9 @@
 namespace kdray {
 
 /// Builds the kd-tree of `scene` on `device`. The tree's bounds are scene.bounds(), its builder
-/// "opencl", its params a copy of `params` (max_depth is clamped to KDRAY_MAX_DEPTH and
-/// large_node_threshold to [1, 64], the width of the small stage's masks). When `report` is given
+/// "opencl", its params a copy of `params`, which validate_build_params must accept (Error
+/// otherwise: max_depth at most KDRAY_MAX_DEPTH, large_node_threshold in [1, 64], the width of
+/// the small stage's masks). When `report` is given
 /// it receives the per-stage times (upload, aabbs, large_nodes, small_nodes, output, download),
 /// build_ms, the level counts of both stages and the peak device memory. Throws Error on any
 /// OpenCL failure, naming the step. An empty scene gives a single empty leaf.

@@ -1,0 +1,70 @@
+#include "core/input_file.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+#include "core/error.h"
+
+namespace kdray {
+namespace {
+
+const char* file_kind(mode_t mode) {
+    if (S_ISFIFO(mode)) return "a FIFO";
+    if (S_ISCHR(mode)) return "a character device";
+    if (S_ISBLK(mode)) return "a block device";
+    if (S_ISSOCK(mode)) return "a socket";
+    return "not a plain file";
+}
+
+/// Closes the descriptor on every path out of read_input_file.
+struct Descriptor {
+    int fd;
+    ~Descriptor() {
+        if (fd >= 0) ::close(fd);
+    }
+};
+
+}  // namespace
+
+std::uint64_t input_size_limit() {
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page_size = ::sysconf(_SC_PAGESIZE);
+    if (pages <= 0 || page_size <= 0) return std::uint64_t(4) << 30;
+    return std::uint64_t(pages) * std::uint64_t(page_size) / 4;
+}
+
+std::string read_input_file(const std::filesystem::path& path, std::string_view what,
+                            std::uint64_t max_bytes) {
+    const std::string name = path.string();
+    // O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer, for ever.
+    Descriptor file{::open(name.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC)};
+    if (file.fd < 0) throw Error(name + ": cannot open: " + std::strerror(errno));
+    struct stat info {};
+    if (::fstat(file.fd, &info) != 0) throw Error(name + ": cannot open: " + std::strerror(errno));
+    // A directory opens on Linux; it is said as open(2) says it for writing.
+    if (S_ISDIR(info.st_mode)) throw Error(name + ": cannot open: " + std::strerror(EISDIR));
+    if (!S_ISREG(info.st_mode))
+        throw Error(name + ": not a regular file (" + file_kind(info.st_mode) + ")");
+    const auto size = static_cast<std::uint64_t>(info.st_size);
+    if (size > max_bytes)
+        throw Error(name + ": " + std::to_string(size) + " bytes, more than the " +
+                    std::to_string(max_bytes) + " a " + std::string(what) + " may have here");
+    std::string text(static_cast<std::size_t>(size), '\0');
+    std::size_t done = 0;
+    // A file that grows while it is read is read up to the size it had.
+    while (done < text.size()) {
+        const ssize_t n = ::read(file.fd, text.data() + done, text.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) throw Error(name + ": cannot read: " + std::strerror(errno));
+        if (n == 0) break;  // it shrank
+        done += std::size_t(n);
+    }
+    text.resize(done);
+    return text;
+}
+
+}  // namespace kdray

@@ -1,0 +1,26 @@
+// input_file.h — how kdray reads every file a user names as input (OBJ and MTL files, render
+// files, tree files): only a regular file is read, its size is checked before the read, and
+// nothing can block (a FIFO) or grow without bound (/dev/zero, a link to it). Errors name the
+// file and the problem.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace kdray {
+
+/// The most bytes kdray reads of one input file of any kind: a quarter of the machine's physical
+/// memory, since a parsed scene takes several times its text.
+std::uint64_t input_size_limit();
+
+/// The whole of `path` in memory. `what` names the kind of file in messages ("OBJ file"). Throws
+/// Error "PATH: cannot open: REASON" when it cannot be opened, "PATH: not a regular file (a FIFO)"
+/// for anything but a regular file (devices, FIFOs, sockets; a symbolic link is followed to what
+/// it names; a directory is "cannot open: Is a directory"), and "PATH: N bytes, more than the M an
+/// WHAT may have" when it exceeds max_bytes.
+std::string read_input_file(const std::filesystem::path& path, std::string_view what,
+                            std::uint64_t max_bytes = input_size_limit());
+
+}  // namespace kdray

@@ -1,0 +1,325 @@
+// test_hostile_input.cpp — input a hostile or unlucky user gives kdray: FIFOs and devices where a
+// file should be, outputs that are device nodes or links, corrupt tree files, MTL files with
+// impossible values, NaN build parameters, names at the file system's length limit, temporaries
+// a killed run left behind. Each runs the binary: one `kdray: error:` line naming the file, exit 1
+// (2 for usage), nothing hangs, nothing the user owns is replaced.
+#include <doctest/doctest.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "tests/support.h"
+
+namespace fs = std::filesystem;
+using namespace kdray::test;
+
+namespace {
+
+const char* kTriangleObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+const char* kSmallRender =
+    R"({"image":{"width":16,"height":12},"camera":{"position":[0.3,0.3,3],"look_at":[0.3,0.3,0]}})";
+// Runs that should end at once get 30 s: a hang fails the test instead of stalling CI.
+constexpr int kNoHang = 30;
+
+void check_error(const CommandResult& r, int status, std::initializer_list<std::string> mentions) {
+    INFO("status " << r.status << ", stderr: " << r.err);
+    CHECK(r.status == status);
+    CHECK(r.err.rfind("kdray: error: ", 0) == 0);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    for (const std::string& m : mentions) CHECK_MESSAGE(r.err.find(m) != std::string::npos, m);
+}
+
+CommandResult render(const fs::path& obj, const fs::path& out, const fs::path& camera,
+                     std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {"render",   obj.string(),    "-o",        out.string(),
+                                     "--camera", camera.string(), "--builder", "reference",
+                                     "--tracer", "reference",     "-q"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_kdray(args, kNoHang);
+}
+
+std::string read_file(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+}  // namespace
+
+TEST_CASE("inputs that are not regular files are refused at once, never read or waited on") {
+    const fs::path dir = fresh_temp_dir("hostile-inputs");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path tri = write_text_file(dir / "tri.obj", kTriangleObj);
+    const fs::path fifo = dir / "f.obj";
+    REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+
+    SUBCASE("an OBJ that is a FIFO (it would block the loader for ever)") {
+        check_error(render(fifo, dir / "out", camera), 1, {"f.obj", "not a regular file", "FIFO"});
+    }
+    SUBCASE("a render file that is a FIFO") {
+        const fs::path json_fifo = dir / "r.json";
+        REQUIRE(::mkfifo(json_fifo.c_str(), 0600) == 0);
+        check_error(render(tri, dir / "out", json_fifo), 1, {"r.json", "not a regular file"});
+    }
+    SUBCASE("an mtllib naming a FIFO") {
+        const fs::path mtl_fifo = dir / "m.mtl";
+        REQUIRE(::mkfifo(mtl_fifo.c_str(), 0600) == 0);
+        const fs::path obj =
+            write_text_file(dir / "m.obj", std::string("mtllib m.mtl\n") + kTriangleObj);
+        check_error(render(obj, dir / "out", camera), 1,
+                    {"m.obj:1", "m.mtl", "not a regular file"});
+    }
+    SUBCASE("an mtllib naming a directory") {
+        fs::create_directories(dir / "lib.mtl");
+        const fs::path obj =
+            write_text_file(dir / "d.obj", std::string("mtllib lib.mtl\n") + kTriangleObj);
+        check_error(render(obj, dir / "out", camera), 1,
+                    {"d.obj:1", "lib.mtl", "not a regular file"});
+    }
+    SUBCASE("an OBJ and a render file that are links to /dev/zero (unbounded bytes)") {
+        fs::create_symlink("/dev/zero", dir / "zero.obj");
+        fs::create_symlink("/dev/zero", dir / "zero.json");
+        check_error(render(dir / "zero.obj", dir / "out", camera), 1,
+                    {"zero.obj", "character device"});
+        check_error(render(tri, dir / "out", dir / "zero.json"), 1,
+                    {"zero.json", "character device"});
+        check_error(run_kdray({"stats", (dir / "zero.obj").string()}, kNoHang), 1, {"zero.obj"});
+    }
+    CHECK_FALSE(fs::exists(dir / "out" / "stats.json"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("an output that is a device node, a link or a directory is refused and left as it is") {
+    const fs::path dir = fresh_temp_dir("hostile-outputs");
+    const fs::path tri = write_text_file(dir / "tri.obj", kTriangleObj);
+    const fs::path target = write_text_file(dir / "precious.txt", "keep me");
+    fs::create_symlink(target, dir / "link.kdt");
+    fs::create_symlink("/dev/null", dir / "null.kdt");
+    for (const char* name : {"link.kdt", "null.kdt"}) {
+        const fs::path out = dir / name;
+        check_error(run_kdray({"build", tri.string(), "--builder", "reference", "-o", out.string()},
+                              kNoHang),
+                    1, {name, "symbolic link", "replaces only regular files"});
+        CHECK(fs::is_symlink(fs::symlink_status(out)));
+    }
+    CHECK(read_file(target) == "keep me");
+    CHECK(fs::is_character_file("/dev/null"));
+    // A folder named like an output (stats.json): said plainly, not "Success".
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    fs::create_directories(dir / "out" / "stats.json");
+    const CommandResult r = render(tri, dir / "out", camera);
+    CHECK(r.status == 1);
+    CHECK(r.err.find("stats.json: exists and is a directory") != std::string::npos);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a corrupt tree file is refused with its name; every corruption is caught") {
+    const fs::path dir = fresh_temp_dir("hostile-tree");
+    const fs::path tri = write_text_file(dir / "quad.obj",
+                                         "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\n"
+                                         "f 1 3 4\nf 1 2 5\nf 2 3 5\n");
+    const fs::path tree = dir / "t.kdt";
+    REQUIRE(
+        run_kdray({"build", tri.string(), "--builder", "reference", "-o", tree.string()}).status ==
+        0);
+    const std::string good = read_file(tree);
+    REQUIRE(run_kdray({"stats", tree.string()}).status == 0);
+    // 100 random single-byte changes (a flipped bit, a random byte), then truncations: none
+    // may pass as a tree.
+    std::mt19937 rng(17);
+    int refused = 0;
+    for (int i = 0; i < 100; ++i) {
+        std::string bad = good;
+        const std::size_t at = rng() % bad.size();
+        bad[at] = char(i % 2 ? bad[at] ^ (1 << (rng() % 8)) : char(bad[at] + 1 + rng() % 255));
+        const fs::path corrupt = write_text_file(dir / "bad.kdt", bad);
+        const CommandResult r = run_kdray({"stats", corrupt.string(), "--json"}, kNoHang);
+        INFO("byte " << at << ": " << r.err);
+        CHECK(r.status == 1);
+        CHECK(r.err.find("bad.kdt") != std::string::npos);
+        refused += r.status == 1;
+    }
+    CHECK(refused == 100);
+    for (std::size_t keep : {std::size_t(0), std::size_t(10), good.size() / 2, good.size() - 1}) {
+        const fs::path cut = write_text_file(dir / "cut.kdt", good.substr(0, keep));
+        check_error(run_kdray({"stats", cut.string()}, kNoHang), 1, {"cut.kdt"});
+    }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("MTL files: values kdray cannot shade are errors with the MTL file and line") {
+    const fs::path dir = fresh_temp_dir("hostile-mtl");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    struct Case {
+        const char* statement;
+        const char* problem;
+    };
+    for (const Case& c : {Case{"Kd nan 0 0", "Kd value 'nan'"}, Case{"Kd -5 0 0", "Kd value '-5'"},
+                          Case{"Ni -1", "Ni value '-1'"}, Case{"Ni nan", "Ni value 'nan'"},
+                          Case{"d 2", "d value '2'"}, Case{"Ks 1e999 0 0", "out of range"},
+                          Case{"illum 2.5", "illum value '2.5'"}, Case{"Kd 1 2", "Kd expects"}}) {
+        INFO(std::string(c.statement));
+        write_text_file(dir / "bad.mtl",
+                        std::string("newmtl m\nKd 0.5 0.5 0.5\n") + c.statement + "\n");
+        const fs::path obj = write_text_file(
+            dir / "scene.obj", std::string("mtllib bad.mtl\nusemtl m\n") + kTriangleObj);
+        check_error(render(obj, dir / "out", camera), 1, {"bad.mtl:3", c.problem});
+    }
+    // An absolute mtllib path is the file it names (tinyobjloader would join it to the folder).
+    write_text_file(dir / "lib" / "red.mtl", "newmtl red\nKd 1 0 0\n");
+    const fs::path obj =
+        write_text_file(dir / "abs.obj", "mtllib " + (dir / "lib" / "red.mtl").string() +
+                                             "\nusemtl red\n" + kTriangleObj);
+    const CommandResult r = render(obj, dir / "out", camera);
+    INFO(r.err);
+    CHECK(r.status == 0);
+    CHECK(r.err.find("warning") == std::string::npos);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("NaN and overflowing build parameters are usage errors, on every command") {
+    const fs::path dir = fresh_temp_dir("hostile-params");
+    const fs::path tri = write_text_file(dir / "tri.obj", kTriangleObj);
+    for (const std::vector<std::string>& option : {std::vector<std::string>{"--ct", "nan"},
+                                                   {"--ci", "1e39"},
+                                                   {"--empty-ratio", "nan"},
+                                                   {"--ci", "nan"},
+                                                   {"--large-threshold", "0"}}) {
+        INFO(option[0] << " " << option[1]);
+        std::vector<std::string> args = {"build", tri.string(), option[0], option[1]};
+        const CommandResult r = run_kdray(args);
+        CHECK(r.status == 2);
+        CHECK(r.err.find(option[0]) != std::string::npos);
+    }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a stem at the file name limit renders; temporaries of a killed run are cleaned") {
+    const fs::path dir = fresh_temp_dir("hostile-names");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    // 246 characters + ".png" is a legal name; its temporary name must still fit.
+    const std::string stem(246, 's');
+    const fs::path obj = write_text_file(dir / (stem + ".obj"), kTriangleObj);
+    const fs::path out = dir / "out";
+    CommandResult r = render(obj, out, camera, {"--aov", "--format", "exr"});
+    INFO(r.err);
+    CHECK(r.status == 0);
+    CHECK(fs::exists(out / (stem + ".exr")));
+    CHECK(fs::exists(out / (stem + ".aov.exr")));
+
+    // A temporary whose writer no longer runs goes; one of a live process (this test) stays.
+    const int dead = 2147483600;  // above any pid_max
+    write_text_file(out / (".frame.png.tmp" + std::to_string(dead) + ".png"), "half");
+    const fs::path live = out / (".frame.png.tmp" + std::to_string(::getpid()) + ".png");
+    write_text_file(live, "in progress");
+    write_text_file(out / ".user-notes.tmp", "not ours");
+    r = render(obj, out, camera);
+    CHECK(r.status == 0);
+    CHECK_FALSE(fs::exists(out / (".frame.png.tmp" + std::to_string(dead) + ".png")));
+    CHECK(fs::exists(live));
+    CHECK(fs::exists(out / ".user-notes.tmp"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a full disk: the run fails naming the file, and no image is left under its name") {
+    // A 200 KB tmpfs, nearly filled; mounting needs root (CI runs as root): elsewhere, skipped.
+    const fs::path dir = fresh_temp_dir("hostile-full");
+    const fs::path mount = dir / "disk";
+    fs::create_directories(mount);
+    const std::string mount_command =
+        "mount -t tmpfs -o size=200k tmpfs '" + mount.string() + "' 2>/dev/null";
+    if (::geteuid() != 0 || std::system(mount_command.c_str()) != 0) {
+        MESSAGE("skipped: cannot mount a small tmpfs here (needs root)");
+        fs::remove_all(dir);
+        return;
+    }
+    write_text_file(mount / "filler", std::string(190 * 1024, 'x'));
+    const fs::path camera = write_text_file(
+        dir / "big.json",
+        R"({"image":{"width":256,"height":256},"camera":{"position":[0.3,0.3,3],"look_at":[0.3,0.3,0]}})");
+    const fs::path tri = write_text_file(dir / "room.obj", kTriangleObj);
+    const CommandResult r = render(tri, mount / "out", camera, {"--aov"});
+    INFO(r.err);
+    CHECK(r.status == 1);
+    CHECK(r.err.find("room") != std::string::npos);
+    CHECK(r.err.find("No space left on device") != std::string::npos);
+    // Nothing of the frame under a final name, and no temporary left.
+    for (const auto& entry : fs::directory_iterator(mount / "out"))
+        CHECK_MESSAGE(false, "left behind: " << entry.path().filename().string());
+    CHECK(std::system(("umount '" + mount.string() + "'").c_str()) == 0);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("two inputs that would write one file are a usage error naming both, before any frame") {
+    const fs::path dir = fresh_temp_dir("hostile-collide");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    write_text_file(dir / "A" / "scene.obj", kTriangleObj);
+    write_text_file(dir / "B" / "scene.obj", kTriangleObj);
+    write_text_file(dir / "x.obj", kTriangleObj);
+    write_text_file(dir / "x.OBJ", kTriangleObj);
+    write_text_file(dir / "a.obj", kTriangleObj);
+    write_text_file(dir / "a.aov.obj", kTriangleObj);
+    const fs::path out = dir / "out";
+    auto run = [&](std::vector<std::string> inputs, std::vector<std::string> extra = {}) {
+        std::vector<std::string> args = {"render"};
+        for (const std::string& in : inputs) args.push_back((dir / in).string());
+        args.insert(args.end(), {"-o", out.string(), "--camera", camera.string(), "--builder",
+                                 "reference", "--tracer", "reference", "-q"});
+        args.insert(args.end(), extra.begin(), extra.end());
+        return run_kdray(args, kNoHang);
+    };
+    check_error(run({"A/scene.obj", "B/scene.obj"}), 2,
+                {"A/scene.obj", "B/scene.obj", "scene.png"});
+    check_error(run({"x.obj", "x.OBJ"}), 2, {"x.obj", "x.OBJ"});
+    check_error(run({"x.obj", "./x.obj"}), 2, {"x.obj", "would both write"});
+    check_error(run({"a.obj", "a.aov.obj"}, {"--aov", "--format", "exr"}), 2, {"a.aov.exr"});
+    CHECK_FALSE(fs::exists(out));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("an interpolated camera without a basis is refused before the first frame") {
+    const fs::path dir = fresh_temp_dir("hostile-camera");
+    // Keys at frames 0 and 2 on opposite sides of look_at: frame 1's position is look_at.
+    const fs::path camera = write_text_file(
+        dir / "keys.json", R"({"image":{"width":16,"height":12},"camera":[)"
+                           R"({"frame":0,"position":[0,0,3],"look_at":[0,0,0]},)"
+                           R"({"frame":2,"position":[0,0,-3],"look_at":[0,0,0]}]})");
+    std::vector<std::string> args = {"render"};
+    for (int f = 0; f < 3; ++f)
+        args.push_back(write_text_file(dir / ("f_" + std::to_string(f) + ".obj"), kTriangleObj));
+    args.insert(args.end(), {"-o", (dir / "out").string(), "--camera", camera.string(), "--builder",
+                             "reference", "--tracer", "reference", "-q"});
+    check_error(run_kdray(args, kNoHang), 1, {"keys.json", "frame 1", "look_at"});
+    CHECK_FALSE(fs::exists(dir / "out" / "f_0.png"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a file name that is not UTF-8 renders and gets a stats.json") {
+    const fs::path dir = fresh_temp_dir("hostile-utf8");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path obj = write_text_file(dir / "b\xff.obj", kTriangleObj);
+    const CommandResult r = render(obj, dir / "out", camera);
+    INFO(r.err);
+    CHECK(r.status == 0);
+    CHECK(fs::exists(dir / "out" / "stats.json"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("kdray stats on a stats.json with wrong types names the file and the field") {
+    const fs::path dir = fresh_temp_dir("hostile-stats");
+    const std::string head = R"({"summary":{},"frames":[)";
+    write_text_file(dir / "a" / "stats.json", head + R"({"frame":0,"frame_ms":"abc"}]})");
+    write_text_file(dir / "b" / "stats.json", head + R"({"frame":-5,"frame_ms":1}]})");
+    check_error(run_kdray({"stats", (dir / "a").string()}, kNoHang), 1,
+                {"stats.json", "frames[0].frame_ms"});
+    check_error(run_kdray({"stats", (dir / "b").string()}, kNoHang), 1,
+                {"stats.json", "frames[0].frame", "-5"});
+    fs::remove_all(dir);
+}
