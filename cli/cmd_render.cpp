@@ -19,6 +19,7 @@
 #include "cli/inputs.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/frame_memory.h"
 #include "core/frame_pipeline.h"
 #include "core/render_file.h"
 #include "core/scene.h"
@@ -117,6 +118,17 @@ int run_render(const RenderCommand& command) {
     // before the first frame costs time.
     if (settings.camera_given)
         for (const std::size_t i : selected) settings.camera_at(int(i));
+    // A frame larger than the host's memory is refused with the figures, before it starts.
+    const FrameMemory frame_memory =
+        estimate_frame_memory(settings.width, settings.height, command.aov);
+    if (const std::uint64_t physical = physical_memory_bytes();
+        physical > 0 && frame_memory.host_bytes > physical / 2)
+        throw Error((command.render_file.empty() ? std::string("the image") : command.render_file) +
+                    ": a " + std::to_string(settings.width) + " x " +
+                    std::to_string(settings.height) + " frame needs about " +
+                    std::to_string(frame_memory.host_bytes >> 20) +
+                    " MiB of host memory, more than half of this machine's " +
+                    std::to_string(physical >> 20) + " MiB");
     DeviceSession session(command.builder.device);
     const std::unique_ptr<TreeBuilder> builder =
         make_tree_builder(command.builder.builder, command.builder.params, session);

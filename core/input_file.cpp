@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "core/error.h"
+#include "core/frame_memory.h"
 
 namespace kdray {
 namespace {
@@ -32,9 +33,8 @@ struct Descriptor {
 }  // namespace
 
 std::uint64_t input_size_limit() {
-    const long pages = ::sysconf(_SC_PHYS_PAGES), page_size = ::sysconf(_SC_PAGESIZE);
-    if (pages <= 0 || page_size <= 0) return std::uint64_t(4) << 30;
-    return std::uint64_t(pages) * std::uint64_t(page_size) / 4;
+    const std::uint64_t physical = physical_memory_bytes();
+    return physical > 0 ? physical / 4 : std::uint64_t(4) << 30;
 }
 
 std::string read_input_file(const std::filesystem::path& path, std::string_view what,

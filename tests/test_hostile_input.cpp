@@ -323,3 +323,15 @@ TEST_CASE("kdray stats on a stats.json with wrong types names the file and the f
                 {"stats.json", "frames[0].frame", "-5"});
     fs::remove_all(dir);
 }
+
+TEST_CASE("an image too large for the machine is refused with the figures before it renders") {
+    const fs::path dir = fresh_temp_dir("hostile-huge");
+    // 65536 x 65536 (the render file's largest size): 4.3 Gpixels, hundreds of GB of buffers.
+    const fs::path camera = write_text_file(
+        dir / "huge.json",
+        R"({"image":{"width":65536,"height":65536},"camera":{"position":[0.3,0.3,3],"look_at":[0.3,0.3,0]}})");
+    const fs::path tri = write_text_file(dir / "tri.obj", kTriangleObj);
+    check_error(render(tri, dir / "out", camera), 1, {"huge.json", "65536 x 65536", "host memory"});
+    CHECK_FALSE(fs::exists(dir / "out" / "tri.png"));
+    fs::remove_all(dir);
+}
