@@ -62,6 +62,7 @@ def main():
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--out", default=os.path.join(ROOT, "docs", "bench-ab"))
+    parser.add_argument("--builds-only", action="store_true", help="skip the animations")
     args = parser.parse_args()
     if not os.path.isdir(os.path.join(SHARED, "scenes")):
         print("bench_ab: ../shared/scenes is absent: nothing to measure", file=sys.stderr)
@@ -77,7 +78,7 @@ def main():
             for side in order:
                 report = run_json([sides[side], "build", obj, "--json", "--repeat", str(args.repeat)])
                 figures[side]["build_ms"][scene] = report["build_ms"]
-        for folder in ANIMATIONS:
+        for folder in [] if args.builds_only else ANIMATIONS:
             for side in order:
                 figures[side]["frame"][folder] = render_run(sides[side], folder)
         rounds.append(figures)
@@ -91,7 +92,7 @@ def main():
         base = median_of("base", lambda f: f["build_ms"][scene])
         head = median_of("head", lambda f: f["build_ms"][scene])
         rows.append({"what": f"build {scene}", "base_ms": base, "head_ms": head})
-    for folder in ANIMATIONS:
+    for folder in [] if args.builds_only else ANIMATIONS:
         for key in ("build_ms", "trace_ms", "frame_ms"):
             base = median_of("base", lambda f: f["frame"][folder][key])
             head = median_of("head", lambda f: f["frame"][folder][key])
@@ -103,7 +104,7 @@ def main():
     result = {"date": str(datetime.date.today()), "commit": git_commit(),
               "machine": machine_description(args.head),
               "command": " ".join(sys.argv), "base": args.base_label, "head": args.head_label,
-              "rounds": args.rounds, "repeat": args.repeat, "rows": rows, "raw": rounds}
+              "rounds": args.rounds, "repeat": args.repeat, "builds_only": args.builds_only, "rows": rows, "raw": rounds}
     with open(args.out + ".json", "w") as f:
         json.dump(result, f, indent=1)
     lines = [f"# A/B benchmark: {args.head_label} against {args.base_label}", "",
