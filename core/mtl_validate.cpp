@@ -51,10 +51,11 @@ void validate_mtl(std::string_view text, const std::string& name) {
     bool in_material = false;
     std::size_t pos = 0;
     while (pos < text.size()) {
-        std::size_t end = text.find('\n', pos);
+        // Lines end in \n, \r\n or a lone \r, as tinyobjloader reads them.
+        std::size_t end = text.find_first_of("\r\n", pos);
         if (end == std::string_view::npos) end = text.size();
         const std::string_view line = text.substr(pos, end - pos);
-        pos = end + 1;
+        pos = end + (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n' ? 2 : 1);
         ++line_no;
         auto fail = [&](const std::string& what) {
             throw Error(name + ":" + std::to_string(line_no) + ": " + what);
@@ -87,7 +88,8 @@ void validate_mtl(std::string_view text, const std::string& name) {
                     fail(std::string(rule.keyword) + " value '" + value + "' is out of range");
                 if (ec != std::errc() || ptr != t[i].data() + t[i].size())
                     fail(std::string(rule.keyword) + " value '" + value + "' is not a number");
-                const bool in_range = std::isfinite(v) &&
+                // Finite as the float tinyobjloader stores (fuzz_mtl: Kd 7.7e39 is inf there).
+                const bool in_range = std::isfinite(static_cast<float>(v)) &&
                                       (rule.lo_open ? v > rule.lo : v >= rule.lo) && v <= rule.hi &&
                                       (!rule.integer || v == std::floor(v));
                 if (!in_range)

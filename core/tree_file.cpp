@@ -63,7 +63,9 @@ class Reader {
         auto n = get<std::uint64_t>();
         if (n > (bytes_.size() - at_) / sizeof(T)) truncated();
         std::vector<T> v(n);
-        std::memcpy(v.data(), bytes_.data() + at_, n * sizeof(T));
+        // An empty vector's data() may be null, which memcpy must not get even for 0 bytes
+        // (fuzz_tree_file found it: a tree file with no leaf indices).
+        if (n > 0) std::memcpy(v.data(), bytes_.data() + at_, n * sizeof(T));
         at_ += n * sizeof(T);
         return v;
     }
@@ -91,6 +93,10 @@ std::uint64_t fnv1a(std::string_view bytes) {
 }
 
 }  // namespace
+
+std::uint64_t tree_file_checksum(std::string_view bytes) {
+    return fnv1a(bytes);
+}
 
 std::uint64_t scene_hash(const Scene& scene) {
     return fnv1a({reinterpret_cast<const char*>(scene.triangles.data()),
@@ -122,7 +128,10 @@ void write_tree_file(const std::filesystem::path& path, const KdTree& tree, cons
 }
 
 TreeFile read_tree_file(const std::filesystem::path& path) {
-    const std::string text = read_input_file(path, "kd-tree file");
+    return parse_tree_file(read_input_file(path, "kd-tree file"), path);
+}
+
+TreeFile parse_tree_file(std::string_view text, const std::filesystem::path& path) {
     if (text.size() < sizeof(kMagic) || std::memcmp(text.data(), kMagic, sizeof(kMagic)) != 0)
         throw Error(path.string() + ": not a kdray kd-tree file");
     // The version comes first, so that an older file is named as such rather than as corrupt.

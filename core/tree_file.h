@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 #include "core/kd_tree.h"
 #include "core/scene.h"
@@ -30,5 +31,9 @@ void write_tree_file(const std::filesystem::path& path, const KdTree& tree, cons
 /// corrupt (checksum), or holds parameters or a tree layout kdray would not build (every node
 /// offset and leaf index is checked).
 TreeFile read_tree_file(const std::filesystem::path& path);
+/// The checksum that ends a tree file: FNV-1a (64 bits) of every byte before it.
+std::uint64_t tree_file_checksum(std::string_view bytes);
+/// The same from a tree file's bytes already in memory; `path` names it in errors.
+TreeFile parse_tree_file(std::string_view bytes, const std::filesystem::path& path);
 
 }  // namespace kdray

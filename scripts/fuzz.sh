@@ -21,11 +21,11 @@ scripts/install-deps.sh --fuzz
 build_dir=build-fuzz
 CC=clang CXX=clang++ cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DKDRAY_FUZZ=ON -DKDRAY_BUILD_TESTS=OFF >/dev/null
-nice -n 19 cmake --build "$build_dir" -j "$(nproc)" --target fuzz_obj fuzz_render_file
+nice -n 19 cmake --build "$build_dir" -j "$(nproc)" --target fuzz_obj fuzz_render_file fuzz_mtl fuzz_tree_file
 
 status=0
 root=$PWD
-for target in obj render_file; do
+for target in obj render_file mtl tree_file; do
     seeds=$root/tests/fuzz/corpus_${target%_file}
     corpus=$root/$build_dir/corpus/$target
     findings=$root/$build_dir/findings/$target
