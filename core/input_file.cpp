@@ -52,7 +52,8 @@ std::string read_input_file(const std::filesystem::path& path, std::string_view 
     const auto size = static_cast<std::uint64_t>(info.st_size);
     if (size > max_bytes)
         throw Error(name + ": " + std::to_string(size) + " bytes, more than the " +
-                    std::to_string(max_bytes) + " a " + std::string(what) + " may have here");
+                    std::to_string(max_bytes) + " bytes kdray reads of one " + std::string(what) +
+                    " here");
     std::string text(static_cast<std::size_t>(size), '\0');
     std::size_t done = 0;
     // A file that grows while it is read is read up to the size it had.

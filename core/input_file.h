@@ -18,8 +18,8 @@ std::uint64_t input_size_limit();
 /// The whole of `path` in memory. `what` names the kind of file in messages ("OBJ file"). Throws
 /// Error "PATH: cannot open: REASON" when it cannot be opened, "PATH: not a regular file (a FIFO)"
 /// for anything but a regular file (devices, FIFOs, sockets; a symbolic link is followed to what
-/// it names; a directory is "cannot open: Is a directory"), and "PATH: N bytes, more than the M an
-/// WHAT may have" when it exceeds max_bytes.
+/// it names; a directory is "cannot open: Is a directory"), and "PATH: N bytes, more than the M
+/// bytes kdray reads of one WHAT here" when it exceeds max_bytes.
 std::string read_input_file(const std::filesystem::path& path, std::string_view what,
                             std::uint64_t max_bytes = input_size_limit());
 
