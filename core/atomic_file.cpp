@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "core/error.h"
+#include "core/input_file.h"
 
 namespace kdray {
 
@@ -21,25 +22,6 @@ namespace {
 
 /// The longest file name most file systems hold (NAME_MAX on Linux).
 constexpr std::size_t kNameMax = 255;
-
-const char* kind_of(fs::file_type type) {
-    switch (type) {
-        case fs::file_type::directory:
-            return "a directory";
-        case fs::file_type::symlink:
-            return "a symbolic link";
-        case fs::file_type::block:
-            return "a block device";
-        case fs::file_type::character:
-            return "a character device";
-        case fs::file_type::fifo:
-            return "a FIFO";
-        case fs::file_type::socket:
-            return "a socket";
-        default:
-            return "not a regular file";
-    }
-}
 
 /// The process id in a temporary name made by temporary_path, or 0 when `name` is not one.
 long temporary_owner(const std::string& name) {
@@ -77,7 +59,7 @@ void write_atomically(const fs::path& path, const std::function<void(const fs::p
     std::error_code ec;
     const fs::file_status existing = fs::symlink_status(path, ec);
     if (fs::exists(existing) && !fs::is_regular_file(existing))
-        throw Error(path.string() + ": exists and is " + kind_of(existing.type()) +
+        throw Error(path.string() + ": exists and is " + file_type_name(existing.type()) +
                     "; kdray replaces only regular files");
     const fs::path temp = temporary_path(path);
     try {

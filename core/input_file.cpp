@@ -14,12 +14,14 @@
 namespace kdray {
 namespace {
 
-const char* file_kind(mode_t mode) {
-    if (S_ISFIFO(mode)) return "a FIFO";
-    if (S_ISCHR(mode)) return "a character device";
-    if (S_ISBLK(mode)) return "a block device";
-    if (S_ISSOCK(mode)) return "a socket";
-    return "not a plain file";
+std::filesystem::file_type type_of(mode_t mode) {
+    using std::filesystem::file_type;
+    if (S_ISDIR(mode)) return file_type::directory;
+    if (S_ISFIFO(mode)) return file_type::fifo;
+    if (S_ISCHR(mode)) return file_type::character;
+    if (S_ISBLK(mode)) return file_type::block;
+    if (S_ISSOCK(mode)) return file_type::socket;
+    return file_type::unknown;
 }
 
 /// Closes the descriptor on every path out of read_input_file.
@@ -31,6 +33,25 @@ struct Descriptor {
 };
 
 }  // namespace
+
+const char* file_type_name(std::filesystem::file_type type) {
+    switch (type) {
+        case std::filesystem::file_type::directory:
+            return "a directory";
+        case std::filesystem::file_type::symlink:
+            return "a symbolic link";
+        case std::filesystem::file_type::block:
+            return "a block device";
+        case std::filesystem::file_type::character:
+            return "a character device";
+        case std::filesystem::file_type::fifo:
+            return "a FIFO";
+        case std::filesystem::file_type::socket:
+            return "a socket";
+        default:
+            return "not a regular file";
+    }
+}
 
 std::uint64_t input_size_limit() {
     const std::uint64_t physical = physical_memory_bytes();
@@ -48,7 +69,7 @@ std::string read_input_file(const std::filesystem::path& path, std::string_view 
     // A directory opens on Linux; it is said as open(2) says it for writing.
     if (S_ISDIR(info.st_mode)) throw Error(name + ": cannot open: " + std::strerror(EISDIR));
     if (!S_ISREG(info.st_mode))
-        throw Error(name + ": not a regular file (" + file_kind(info.st_mode) + ")");
+        throw Error(name + ": not a regular file (" + file_type_name(type_of(info.st_mode)) + ")");
     const auto size = static_cast<std::uint64_t>(info.st_size);
     if (size > max_bytes)
         throw Error(name + ": " + std::to_string(size) + " bytes, more than the " +

@@ -11,6 +11,10 @@
 
 namespace kdray {
 
+/// What a file that is not a regular file is, for messages: "a FIFO", "a character device", ...
+/// (the one wording of input_file and atomic_file's refusals).
+const char* file_type_name(std::filesystem::file_type type);
+
 /// The most bytes kdray reads of one input file of any kind: a quarter of the machine's physical
 /// memory, since a parsed scene takes several times its text.
 std::uint64_t input_size_limit();
