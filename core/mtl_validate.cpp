@@ -1,10 +1,10 @@
 #include "core/mtl_validate.h"
 
-#include <charconv>
 #include <cmath>
 #include <vector>
 
 #include "core/error.h"
+#include "core/obj_number.h"
 
 namespace kdray {
 namespace {
@@ -37,11 +37,12 @@ struct NumericRule {
 
 constexpr double kInf = INFINITY;
 constexpr NumericRule kRules[] = {
-    {"Ka", 1, 3, 0, kInf, false, false, ">= 0"},   {"Kd", 1, 3, 0, kInf, false, false, ">= 0"},
-    {"Ks", 1, 3, 0, kInf, false, false, ">= 0"},   {"Ke", 1, 3, 0, kInf, false, false, ">= 0"},
-    {"Tf", 1, 3, 0, kInf, false, false, ">= 0"},   {"Ns", 1, 1, 0, kInf, false, false, ">= 0"},
-    {"Ni", 1, 1, 0, kInf, false, false, ">= 0"},   {"d", 1, 1, 0, 1, false, false, "in [0, 1]"},
-    {"Tr", 1, 1, 0, 1, false, false, "in [0, 1]"}, {"illum", 1, 1, 0, 10, false, true, "0 to 10"},
+    {"Ka", 1, 3, 0, kInf, false, false, ">= 0"},    {"Kd", 1, 3, 0, kInf, false, false, ">= 0"},
+    {"Ks", 1, 3, 0, kInf, false, false, ">= 0"},    {"Ke", 1, 3, 0, kInf, false, false, ">= 0"},
+    {"Tf", 1, 3, 0, kInf, false, false, ">= 0"},    {"Kt", 1, 3, 0, kInf, false, false, ">= 0"},
+    {"Ns", 1, 1, 0, kInf, false, false, ">= 0"},    {"Ni", 1, 1, 0, kInf, false, false, ">= 0"},
+    {"d", 1, 1, 0, 1, false, false, "in [0, 1]"},   {"Tr", 1, 1, 0, 1, false, false, "in [0, 1]"},
+    {"illum", 1, 1, 0, 10, false, true, "0 to 10"},
 };
 
 }  // namespace
@@ -71,8 +72,10 @@ void validate_mtl(std::string_view text, const std::string& name) {
         for (const NumericRule& rule : kRules) {
             if (t[0] != rule.keyword) continue;
             // `Tf xyz r g b` and `Tf spectral file`: colour spaces kdray does not read.
-            if (rule.keyword == "Tf" && t.size() > 1 && (t[1] == "xyz" || t[1] == "spectral"))
-                fail("Tf " + std::string(t[1]) + " is not supported; give Tf as r g b");
+            if ((rule.keyword == "Tf" || rule.keyword == "Kt") && t.size() > 1 &&
+                (t[1] == "xyz" || t[1] == "spectral"))
+                fail(std::string(rule.keyword) + " " + std::string(t[1]) +
+                     " is not supported; give it as r g b");
             if (!in_material) fail(std::string(rule.keyword) + " before any newmtl");
             const std::size_t n = t.size() - 1;
             if (n < rule.min_values || n > rule.max_values || (rule.max_values == 3 && n == 2))
@@ -82,15 +85,10 @@ void validate_mtl(std::string_view text, const std::string& name) {
                      ", not " + std::to_string(n));
             for (std::size_t i = 1; i < t.size(); ++i) {
                 double v = 0;
-                const auto [ptr, ec] = std::from_chars(t[i].data(), t[i].data() + t[i].size(), v);
                 const std::string value(t[i].substr(0, 40));
-                if (ec == std::errc::result_out_of_range)
-                    fail(std::string(rule.keyword) + " value '" + value + "' is out of range");
-                if (ec != std::errc() || ptr != t[i].data() + t[i].size())
-                    fail(std::string(rule.keyword) + " value '" + value + "' is not a number");
-                // Finite as the float tinyobjloader stores (fuzz_mtl: Kd 7.7e39 is inf there).
-                const bool in_range = std::isfinite(static_cast<float>(v)) &&
-                                      (rule.lo_open ? v > rule.lo : v >= rule.lo) && v <= rule.hi &&
+                if (const char* problem = obj_number_problem(t[i], &v))
+                    fail(std::string(rule.keyword) + " value '" + value + "' " + problem);
+                const bool in_range = (rule.lo_open ? v > rule.lo : v >= rule.lo) && v <= rule.hi &&
                                       (!rule.integer || v == std::floor(v));
                 if (!in_range)
                     fail(std::string(rule.keyword) + " value '" + value + "' must be " +

@@ -9,7 +9,7 @@
 
 namespace kdray {
 
-/// Checks the statements kdray reads: colours (Ka, Kd, Ks, Ke, Tf) are one or three finite
+/// Checks the statements kdray reads: colours (Ka, Kd, Ks, Ke, Tf and its alias Kt) are one or three finite
 /// numbers >= 0, Ns and Ni finite numbers >= 0 (BART writes Ni 0 for opaque materials; the loader
 /// warns about a material that transmits with Ni 0), d and Tr finite numbers in
 /// [0, 1], illum an integer from 0 to 10; every numeric statement belongs to a `newmtl`. Other

@@ -293,6 +293,36 @@ TEST_CASE("inputs found by fuzzing (tests/fuzz) fail with their line") {
     huge += "1e1000040";
     CHECK(load_error("v " + huge + " 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
               .find("bad.obj:1: vertex coordinate '0.000") != std::string::npos);
+    // `0e725` is exactly zero, but tinyobjloader computes 0 · 5^725 · 2^725 = 0 · inf = NaN
+    // (fuzz_mtl, in a Kd). The OBJ fast path took it as a plain zero.
+    CHECK(load_error("v 0e725 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+              .find("bad.obj:1: vertex coordinate '0e725' has an exponent above 308") !=
+          std::string::npos);
+    // 400 digits and then e-399 is 1.0, but tinyobjloader's mantissa is already inf.
+    CHECK(load_error("v 1" + std::string(399, '0') + "e-399 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+              .find("is longer than the 64 characters kdray reads") != std::string::npos);
+}
+
+TEST_CASE("MTL numbers are read as tinyobjloader reads them") {
+    TempDir dir;
+    const std::string obj =
+        std::string("mtllib m.mtl\nusemtl m\n") + kTriangleVertices + "f 1 2 3\n";
+    const fs::path path = dir.write("m.obj", obj);
+    // tinyobjloader accepts a leading '+'; so does the pre-scan.
+    dir.write("m.mtl", "newmtl m\nKd +0.5 .25 +1e-1\n");
+    CHECK(load_obj(path).materials.at(0).diffuse == Vec3{0.5f, 0.25f, 0.1f});
+    dir.write("m.mtl", "newmtl m\nKd 0e725 0.71 5.6\n");  // fuzz_mtl: NaN in tinyobjloader
+    CHECK_THROWS_WITH_AS(load_obj(path),
+                         doctest::Contains("m.mtl:2: Kd value '0e725' has an exponent above 308"),
+                         Error);
+    // tinyobjloader reads Kt as Tf (fuzz_mtl: a negative Kt went through).
+    dir.write("m.mtl", "newmtl m\nKt -0.725 0.71 0\n");
+    CHECK_THROWS_WITH_AS(load_obj(path), doctest::Contains("m.mtl:2: Kt value '-0.725' must be"),
+                         Error);
+    dir.write("m.mtl", "newmtl m\nKs 1e999 0 0\n");
+    CHECK_THROWS_WITH_AS(load_obj(path),
+                         doctest::Contains("m.mtl:2: Ks value '1e999' is not a finite number"),
+                         Error);
 }
 
 TEST_CASE("a missing or unreadable file fails with the reason") {
