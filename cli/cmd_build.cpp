@@ -16,8 +16,8 @@ namespace kdray::cli {
 int run_build(const BuildCommand& command) {
     Scene scene = load_obj(command.scene);
     DeviceSession session(command.builder.device);
-    const std::unique_ptr<TreeBuilder> builder =
-        make_tree_builder(command.builder.builder, command.builder.params, session);
+    const std::unique_ptr<TreeBuilder> builder = make_tree_builder(
+        command.builder.builder, command.builder.build_params(kStaticBuildQuality), session);
     builder->prepare();
     BuiltTree built = builder->build(scene);
     std::vector<double> samples;

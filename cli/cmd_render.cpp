@@ -130,8 +130,12 @@ int run_render(const RenderCommand& command) {
                     " MiB of host memory, more than half of this machine's " +
                     std::to_string(physical >> 20) + " MiB");
     DeviceSession session(command.builder.device);
+    // A dynamic scene is rebuilt every frame: the ladder's fastest frame; one frame: the best tree.
     const std::unique_ptr<TreeBuilder> builder =
-        make_tree_builder(command.builder.builder, command.builder.params, session);
+        make_tree_builder(command.builder.builder,
+                          command.builder.build_params(selected.size() > 1 ? kAnimationBuildQuality
+                                                                           : kStaticBuildQuality),
+                          session);
     const std::unique_ptr<Tracer> tracer = make_tracer(command.tracer, command.threads, session);
     builder->prepare();
     FramePipeline pipeline(*builder, *tracer, settings, frame_options(command));

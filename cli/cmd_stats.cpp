@@ -20,14 +20,18 @@ namespace kdray::cli {
 namespace {
 
 nlohmann::json defaults_json(const BuilderOptions& o) {
-    const BuildParams& p = o.params;
+    const BuildParams p = o.build_params(kStaticBuildQuality);
     return {{"builder", o.builder},
+            {"quality", build_quality_of(p)},
+            {"animation_quality", build_quality_name(kAnimationBuildQuality)},
             {"device", o.device.empty() ? "first GPU, else first device" : o.device},
             {"cost_traversal", p.costs.traversal},
             {"cost_intersection", p.costs.intersection},
             {"large_node_threshold", p.large_node_threshold},
             {"empty_space_ratio", p.empty_space_ratio},
             {"large_split_bins", p.large_split_bins},
+            {"small_reclip_refs", p.small_reclip_refs},
+            {"small_leaf_refs", p.small_leaf_refs},
             {"empty_bonus", p.empty_bonus},
             {"max_depth", p.max_depth}};
 }
@@ -93,8 +97,8 @@ int run_stats(const StatsCommand& command) {
         out = {{"devices", list_devices_json()}, {"defaults", defaults_json(command.builder)}};
     } else {
         DeviceSession session(command.builder.device);
-        const std::unique_ptr<TreeBuilder> builder =
-            make_tree_builder(command.builder.builder, command.builder.params, session);
+        const std::unique_ptr<TreeBuilder> builder = make_tree_builder(
+            command.builder.builder, command.builder.build_params(kStaticBuildQuality), session);
         nlohmann::json items = nlohmann::json::array();
         for (const std::string& path : command.paths) items.push_back(path_json(path, *builder));
         out = command.paths.size() == 1 ? items[0] : nlohmann::json{{"items", items}};

@@ -2,9 +2,11 @@
 // Commands return the process exit status; they throw kdray::Error for main to report.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/build_quality.h"
 #include "core/kd_tree.h"
 
 namespace kdray::cli {
@@ -13,7 +15,14 @@ namespace kdray::cli {
 struct BuilderOptions {
     std::string builder = "opencl";  // "opencl" or "reference"
     std::string device;              // index or name substring; empty: first GPU, else first device
-    BuildParams params;
+    BuildParams params;              // the ladder's three below come from the quality
+    std::string quality;             // low, medium, high; empty: the command's default
+    // Set by the user apart from the quality (--large-bins, --reclip-refs, --leaf-refs).
+    std::optional<int> large_split_bins, small_reclip_refs, small_leaf_refs;
+
+    /// params at `quality` (default_quality when none was given), with the ladder options the
+    /// user set kept.
+    BuildParams build_params(BuildQuality default_quality) const;
 };
 
 struct BuildCommand {

@@ -44,11 +44,26 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
                    "node's extent (Zhou et al.'s C_e)")
         ->check(CLI::Range(0.0f, 1.0f))
         ->capture_default_str();
-    app.add_option("--large-bins", o.params.large_split_bins,
+    app.add_option("--quality", o.quality,
+                   "OpenCL builder: tree quality against build time (docs/quality-ladder.md): "
+                   "high (exact SAH everywhere), medium, low (fastest build). Default: " +
+                       std::string(kdray::build_quality_name(kdray::kAnimationBuildQuality)) +
+                       " for a render of several frames, else " +
+                       kdray::build_quality_name(kdray::kStaticBuildQuality))
+        ->check(CLI::IsMember({"low", "medium", "high"}));
+    app.add_option("--large-bins", o.large_split_bins,
                    "OpenCL builder: split a large node at the cheapest by the SAH of this many "
-                   "bins per axis of its tight box; 0: at the spatial median (Zhou et al.)")
-        ->check(CLI::Range(0, kdray::kMaxLargeSplitBins))
-        ->capture_default_str();
+                   "bins per axis of its tight box; 0: at the spatial median (Zhou et al.). "
+                   "Default: by --quality")
+        ->check(CLI::Range(0, kdray::kMaxLargeSplitBins));
+    app.add_option("--reclip-refs", o.small_reclip_refs,
+                   "OpenCL builder: a small node of at most this many triangles re-clips those "
+                   "reaching past its box before its SAH search (0: never). Default: by --quality")
+        ->check(CLI::Range(0, int(KDRAY_RECLIP_REFS)));
+    app.add_option("--leaf-refs", o.small_leaf_refs,
+                   "OpenCL builder: a small node of at most this many triangles is a leaf "
+                   "without an SAH search (0: search every node). Default: by --quality")
+        ->check(CLI::Range(0, KDRAY_SMALL_ROOT_MAX_REFS));
     app.add_option("--max-depth", o.params.max_depth, "deepest tree level")
         ->check(CLI::Range(1, KDRAY_MAX_DEPTH))
         ->capture_default_str();
@@ -160,7 +175,7 @@ int main(int argc, char** argv) {
     // overflows to inf: the one parameter check decides, as a usage error.
     try {
         for (const BuilderOptions* o : {&build.builder, &render.builder, &stats.builder})
-            kdray::validate_build_params(o->params);
+            kdray::validate_build_params(o->build_params(kdray::kStaticBuildQuality));
     } catch (const kdray::Error& e) {
         std::cerr << "kdray: error: " << e.what() << " (see kdray --help)\n";
         return 2;

@@ -34,6 +34,12 @@ void validate_build_params(const BuildParams& p) {
     if (p.large_split_bins < 0 || p.large_split_bins > kMaxLargeSplitBins)
         reject("the large-node SAH bins", "--large-bins", p.large_split_bins,
                "an integer from 0 to 64");
+    if (p.small_reclip_refs < 0 || p.small_reclip_refs > int(KDRAY_RECLIP_REFS))
+        reject("the small-node re-clip size", "--reclip-refs", p.small_reclip_refs,
+               "an integer from 0 to 32");
+    if (p.small_leaf_refs < 0 || p.small_leaf_refs > KDRAY_SMALL_ROOT_MAX_REFS)
+        reject("the small-node leaf size", "--leaf-refs", p.small_leaf_refs,
+               "an integer from 0 to 64");
     if (p.max_depth < 0 || p.max_depth > KDRAY_MAX_DEPTH)
         reject("the tree depth limit", "--max-depth", p.max_depth, "an integer from 0 to 64");
 }

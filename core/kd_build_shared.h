@@ -28,6 +28,11 @@
  * so the largest large-node threshold T. */
 #define KDRAY_SMALL_ROOT_MAX_REFS 64
 
+/* Most references of a small node that re-clips its triangles to its own box
+ * (build_small_reclip.cl): the size of the work-item's private table, and so the largest
+ * BuildParams::small_reclip_refs. */
+#define KDRAY_RECLIP_REFS 32u
+
 /* Empty-space cuts one large node may chain in one level (each side of its box at most once). */
 #define KDRAY_MAX_CUTS 6u
 
@@ -40,8 +45,9 @@
 #define KDRAY_SLOT_SMALL 3u        /* the child becomes a small root (1/0) */
 #define KDRAY_SLOT_SMALL_REFS 4u   /* ... its reference count */
 #define KDRAY_SLOT_LEAF_REFS 5u    /* references of a node that becomes a leaf (in its slot 2i) */
-#define KDRAY_SLOT_CHILD 6u /* new nodes of generation 0 (then 1, ..., KDRAY_MAX_CUTS): node ids \
-                             */
+#define KDRAY_SLOT_CHILD                                                    \
+    6u /* new nodes of generation 0 (then 1, ..., KDRAY_MAX_CUTS): node ids \
+        */
 #define KDRAY_SLOT_KINDS (KDRAY_SLOT_CHILD + KDRAY_MAX_CUTS + 1u)
 
 /* Counts per SAH bin of a large node's reduction chunk (build_large_sah.cl): 3 axes, the
@@ -170,7 +176,9 @@ typedef struct KdLargeLevelArgs {
  * references start at ref_begin) and how the small stage builds and lays out their subtrees:
  * first_scale records per reference and root in the first pass, second_pass (1: the pass that
  * rebuilds the subtrees that outgrew the first), the depth limit, the SAH costs C_t, C_i and the
- * empty-space bonus; pad 0. */
+ * empty-space bonus, the node size at or below which a node re-clips (reclip_refs, at most
+ * KDRAY_RECLIP_REFS; 0: never) and at or below which it is a leaf without a search (leaf_size;
+ * 0: every node is searched); pad 0. */
 typedef struct KdSmallBatchArgs {
     kd_u32 root_begin;
     kd_u32 roots;
@@ -181,7 +189,9 @@ typedef struct KdSmallBatchArgs {
     kd_f32 cost_traversal;
     kd_f32 cost_intersection;
     kd_f32 empty_bonus;
-    kd_u32 pad[3];
+    kd_u32 reclip_refs;
+    kd_u32 leaf_size;
+    kd_u32 pad;
 } KdSmallBatchArgs;
 
 #ifndef KDRAY_DEVICE_CODE

@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/kd_build_shared.h"
 #include "core/kd_shared.h"
 #include "core/math.h"
 
@@ -38,13 +39,21 @@ struct BuildParams {
     /// of this many equal bins per axis of its tight box; 0 splits it at the spatial median of
     /// its longest axis, as Zhou et al. do. At most kMaxLargeSplitBins.
     int large_split_bins = 32;
+    /// OpenCL builder: a small node of at most this many triangles, some of them reaching past
+    /// its box, re-clips them to the box and searches its subtree over the clipped boxes
+    /// (build_small_reclip.cl); 0 never does. At most KDRAY_RECLIP_REFS.
+    int small_reclip_refs = KDRAY_RECLIP_REFS;
+    /// OpenCL builder: a small node of at most this many triangles is a leaf without a search;
+    /// 0 searches every node (a leaf then only where no split beats C_i N).
+    int small_leaf_refs = 0;
     int max_depth = KDRAY_MAX_DEPTH;
 };
 
 /// Throws Error naming the parameter (and the command-line option that sets it) when `params`
 /// is outside what the builders support: C_t finite >= 0, C_i finite > 0, empty_bonus in [0, 1),
 /// large_node_threshold in [1, 64] (the small stage's 64-bit masks), empty_space_ratio in [0, 1],
-/// large_split_bins in [0, kMaxLargeSplitBins], max_depth in [0, KDRAY_MAX_DEPTH]. NaN fails every
+/// large_split_bins in [0, kMaxLargeSplitBins], small_reclip_refs in [0, KDRAY_RECLIP_REFS],
+/// small_leaf_refs in [0, 64], max_depth in [0, KDRAY_MAX_DEPTH]. NaN fails every
 /// test. The one check of every builder, the command line and tree files read back.
 void validate_build_params(const BuildParams& params);
 

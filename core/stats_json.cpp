@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "core/build_quality.h"
 #include "core/tree_stats.h"
 
 namespace kdray {
@@ -30,9 +31,12 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
                    {"cost_intersection", p.costs.intersection},
                    {"max_depth", p.max_depth}};
     if (tree.builder == "opencl") {
+        j["quality"] = build_quality_of(p);
         j["params"]["large_node_threshold"] = p.large_node_threshold;
         j["params"]["empty_space_ratio"] = p.empty_space_ratio;
         j["params"]["large_split_bins"] = p.large_split_bins;
+        j["params"]["small_reclip_refs"] = p.small_reclip_refs;
+        j["params"]["small_leaf_refs"] = p.small_leaf_refs;
         j["params"]["empty_bonus"] = p.empty_bonus;
         j["large_node_levels"] = built.report.large_node_levels;
         j["small_node_levels"] = built.report.small_node_levels;

@@ -10,6 +10,7 @@ Exit status: 0 all agree, 1 some disagree or a run failed, 77 when ../shared (or
 absent, so that CTest reports a skip.
 
   scripts/compare_embree.py --kdray build/kdray [--builder reference] [--tracer reference]
+      [--quality low,medium,high]
                             [--quick] [--peer PATH]
 """
 import argparse
@@ -64,6 +65,9 @@ def main():
     parser.add_argument("--peer-dir", help="build the peer into this folder once and reuse it")
     parser.add_argument("--quick", action="store_true", help="leave out the slowest scenes")
     parser.add_argument("--max-mismatch", type=float, default=1e-4)
+    parser.add_argument("--quality", default="",
+                        help="OpenCL builder: comma-separated build qualities to render each scene "
+                             "at, each compared with Embree (default: kdray's default)")
     args = parser.parse_args()
 
     if not os.path.isdir(os.path.join(SHARED, "scenes")):
@@ -80,32 +84,35 @@ def main():
             print("compare_embree: skipped: the Embree peer is not available")
             return SKIP
         failures = 0
+        qualities = [q for q in args.quality.split(",") if q] or [None]
         for folder, obj, camera in scene_files(args.quick):
-            name = f"{folder}/{os.path.basename(obj)}"
-            out = os.path.join(tmp, folder)
-            start = time.time()
-            run = subprocess.run([args.kdray, "render", obj, "--camera", camera, "--aov", "-q",
-                                  "--builder", args.builder, "--tracer", args.tracer, "-o", out],
-                                 capture_output=True, text=True)
-            if run.returncode != 0:
-                print(f"FAIL {name}: kdray: {run.stderr.strip()}")
-                failures += 1
-                continue
-            kdray_seconds = time.time() - start
             stem = os.path.splitext(os.path.basename(obj))[0]
-            ours = os.path.join(out, stem + ".aov.exr")
             theirs = os.path.join(tmp, f"{folder}-{stem}.embree.exr")
             subprocess.run([peer, obj, "--camera", camera, "--aov", theirs, "--repeat", "1"],
                            check=True, capture_output=True)
-            cmp = subprocess.run([peer, "--compare", ours, theirs], check=True,
-                                 capture_output=True, text=True)
-            counts = json.loads(cmp.stdout)
-            ok = counts["mismatch_fraction"] <= args.max_mismatch
-            failures += not ok
-            print(f"{'ok  ' if ok else 'FAIL'} {name}: mismatch_fraction "
-                  f"{counts['mismatch_fraction']:.2e} (hit/miss {counts['hit_miss_mismatch']}, "
-                  f"distance {counts['distance_mismatch']}, tie {counts['prim_tie_mismatch']} "
-                  f"of {counts['pixels']}), kdray {kdray_seconds:.1f} s")
+            for quality in qualities:
+                name = f"{folder}/{os.path.basename(obj)}" + (f" at {quality}" if quality else "")
+                out = os.path.join(tmp, folder)
+                start = time.time()
+                run = subprocess.run([args.kdray, "render", obj, "--camera", camera, "--aov", "-q",
+                                      "--builder", args.builder, "--tracer", args.tracer, "-o", out]
+                                     + (["--quality", quality] if quality else []),
+                                     capture_output=True, text=True)
+                if run.returncode != 0:
+                    print(f"FAIL {name}: kdray: {run.stderr.strip()}")
+                    failures += 1
+                    continue
+                kdray_seconds = time.time() - start
+                ours = os.path.join(out, stem + ".aov.exr")
+                cmp = subprocess.run([peer, "--compare", ours, theirs], check=True,
+                                     capture_output=True, text=True)
+                counts = json.loads(cmp.stdout)
+                ok = counts["mismatch_fraction"] <= args.max_mismatch
+                failures += not ok
+                print(f"{'ok  ' if ok else 'FAIL'} {name}: mismatch_fraction "
+                      f"{counts['mismatch_fraction']:.2e} (hit/miss {counts['hit_miss_mismatch']}, "
+                      f"distance {counts['distance_mismatch']}, tie {counts['prim_tie_mismatch']} "
+                      f"of {counts['pixels']}), kdray {kdray_seconds:.1f} s")
         print(f"compare_embree: {failures} scene(s) disagree" if failures else
               "compare_embree: every scene agrees with Embree")
         return 1 if failures else 0

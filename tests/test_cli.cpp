@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/build_quality.h"
 #include "core/camera.h"
 #include "core/image.h"
 #include "core/kd_render.h"
@@ -103,6 +104,64 @@ TEST_CASE("kdray build --json reports the tree the reference builder makes in-pr
     REQUIRE_MESSAGE(s.status == 0, s.err);
     CHECK(nlohmann::json::parse(s.out)["tree"]["nodes"].get<std::size_t>() ==
           expected.nodes.size());
+    fs::remove_all(dir);
+}
+
+TEST_CASE("--quality: the ladder's parameters, each command's default, options set apart win") {
+    fs::path dir = fresh_temp_dir("cli-quality");
+    Scene scene = random_triangles(500, 13);
+    const fs::path obj = write_obj(dir / "in" / "frame_1.obj", scene);
+    write_obj(dir / "in" / "frame_2.obj", scene);
+    const fs::path render = write_text_file(dir / "render.json", kSmallRender);
+    auto ladder = [](const nlohmann::json& params) {
+        return std::vector<int>{params["large_split_bins"].get<int>(),
+                                params["small_reclip_refs"].get<int>(),
+                                params["small_leaf_refs"].get<int>()};
+    };
+    auto level = [](BuildQuality q) {
+        const BuildParams p = with_build_quality({}, q);
+        return std::vector<int>{p.large_split_bins, p.small_reclip_refs, p.small_leaf_refs};
+    };
+    auto build_json = [&](std::vector<std::string> extra) {
+        std::vector<std::string> args = {"build", obj.string(), "--json"};
+        args.insert(args.end(), extra.begin(), extra.end());
+        const CommandResult r = run_kdray(args);
+        REQUIRE_MESSAGE(r.status == 0, r.err);
+        return nlohmann::json::parse(r.out);
+    };
+    // build: the static default; each named level; an option set apart makes it custom.
+    nlohmann::json j = build_json({});
+    CHECK(j["quality"] == build_quality_name(kStaticBuildQuality));
+    CHECK(ladder(j["params"]) == level(kStaticBuildQuality));
+    std::size_t previous_nodes = std::size_t(-1);
+    for (BuildQuality q : {BuildQuality::High, BuildQuality::Medium, BuildQuality::Low}) {
+        j = build_json({"--quality", build_quality_name(q)});
+        CHECK(j["quality"] == build_quality_name(q));
+        CHECK(ladder(j["params"]) == level(q));
+        CHECK(j["nodes"].get<std::size_t>() < previous_nodes);
+        previous_nodes = j["nodes"].get<std::size_t>();
+    }
+    j = build_json({"--quality", "low", "--leaf-refs", "2"});
+    CHECK(j["quality"] == "custom");
+    CHECK(j["params"]["small_leaf_refs"] == 2);
+    CHECK(j["params"]["large_split_bins"] == level(BuildQuality::Low)[0]);
+    // render: several frames get the animation default, one frame the static one.
+    const fs::path out = dir / "out";
+    CommandResult r = run_kdray({"render", (dir / "in" / "frame_1.obj").string(),
+                                 (dir / "in" / "frame_2.obj").string(), "-o", out.string(),
+                                 "--camera", render.string(), "--tracer", "reference", "-q"});
+    REQUIRE_MESSAGE(r.status == 0, r.err);
+    for (const nlohmann::json& frame : read_json(out / "stats.json")["frames"])
+        CHECK(frame["tree"]["quality"] == build_quality_name(kAnimationBuildQuality));
+    r = run_kdray({"render", obj.string(), "-o", (dir / "one").string(), "--camera",
+                   render.string(), "--tracer", "reference", "-q"});
+    REQUIRE_MESSAGE(r.status == 0, r.err);
+    CHECK(read_json(dir / "one" / "stats.json")["frames"][0]["tree"]["quality"] ==
+          build_quality_name(kStaticBuildQuality));
+    // A name off the ladder is a usage error.
+    r = run_kdray({"build", obj.string(), "--quality", "ultra"});
+    CHECK(r.status == 2);
+    CHECK(r.err.find("--quality") != std::string::npos);
     fs::remove_all(dir);
 }
 

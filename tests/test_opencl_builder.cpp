@@ -4,13 +4,16 @@
 // zero-area) are where a GPU builder hangs, explodes or drops triangles.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "cl/build/opencl_builder.h"
 #include "cl/runtime/program_cache.h"
+#include "core/build_quality.h"
 #include "core/error.h"
 #include "core/kd_traverse.h"
 #include "core/reference_builder.h"
@@ -37,10 +40,10 @@ int count_disagreements(const KdTree& tree, const Scene& scene, const std::vecto
     return bad;
 }
 
-void check_build(const Scene& scene, const std::string& name) {
+void check_build(const Scene& scene, const std::string& name, const BuildParams& params = {}) {
     CAPTURE(name);
     BuildReport report;
-    const KdTree tree = build_opencl(test::opencl_test_device(), scene, {}, &report);
+    const KdTree tree = build_opencl(test::opencl_test_device(), scene, params, &report);
     CHECK(tree.builder == "opencl");
     const std::vector<std::string> problems = check_tree(tree, scene);
     for (const std::string& p : problems) CAPTURE(p);
@@ -173,6 +176,87 @@ void check_same_tree(const KdTree& other, const KdTree& tree, const Scene& scene
 
 TEST_CASE("opencl builder: hard scenes pass the checker and trace like brute force") {
     for (const test::NamedScene& s : test::hard_scenes()) check_build(s.scene, s.name);
+}
+
+TEST_CASE("opencl builder: every build quality passes the checker and traces like brute force") {
+    for (BuildQuality q : {BuildQuality::Low, BuildQuality::Medium}) {
+        CAPTURE(std::string(build_quality_name(q)));
+        const BuildParams params = with_build_quality({}, q);
+        for (const test::NamedScene& s : test::hard_scenes()) check_build(s.scene, s.name, params);
+        check_build(test::random_triangles(5000, 1005), "random_5000", params);
+    }
+}
+
+TEST_CASE("opencl builder: the quality ladder builds smaller trees level by level, SAH bounded") {
+    // On 4000 random triangles: each level down has fewer nodes than the one above; high stays
+    // within the reference builder's SAH bound of the test above, and low within 1.5 times it (a
+    // usable tree). The SAH itself need not rise level by level: the search prices an empty side
+    // at (1 - empty_bonus), which the tree's SAH does not, so it splits some nodes of a few
+    // triangles that a leaf would cost less as (medium 1690 against high 1731 here).
+    const Scene scene = test::random_triangles(4000, 81, 1.0f, 0.05f);
+    const BuildParams defaults;
+    const double ref_sah =
+        compute_tree_stats(build_reference(scene, defaults), scene.triangle_count(), defaults.costs)
+            .sah_cost;
+    double sah = 0;
+    std::size_t previous_nodes = std::size_t(-1);
+    for (BuildQuality q : {BuildQuality::High, BuildQuality::Medium, BuildQuality::Low}) {
+        CAPTURE(std::string(build_quality_name(q)));
+        const BuildParams params = with_build_quality(defaults, q);
+        const KdTree tree = build_opencl(test::opencl_test_device(), scene, params);
+        sah = compute_tree_stats(tree, scene.triangle_count(), params.costs).sah_cost;
+        CAPTURE(sah);
+        CAPTURE(ref_sah);
+        CHECK(tree.nodes.size() < previous_nodes);
+        if (q == BuildQuality::High) CHECK(sah <= 1.12 * ref_sah);
+        previous_nodes = tree.nodes.size();
+    }
+    CHECK(sah <= 1.5 * ref_sah);  // low
+}
+
+/// The distinct triangles under node `i` of `tree`, into `out`.
+void subtree_triangles(const KdTree& tree, kd_u32 i, std::set<kd_u32>& out) {
+    const KdNode n = tree.nodes[i];
+    if (kd_node_is_leaf(n)) {
+        for (kd_u32 k = 0; k < kd_leaf_count(n); ++k)
+            out.insert(tree.leaf_indices[kd_leaf_offset(n) + k]);
+        return;
+    }
+    subtree_triangles(tree, i + 1, out);
+    subtree_triangles(tree, kd_node_above_child(n), out);
+}
+
+/// The fewest distinct triangles under any inner node of `tree`.
+std::size_t fewest_under_inner_node(const KdTree& tree) {
+    std::size_t fewest = std::size_t(-1);
+    for (kd_u32 i = 0; i < tree.nodes.size(); ++i) {
+        if (kd_node_is_leaf(tree.nodes[i])) continue;
+        std::set<kd_u32> under;
+        subtree_triangles(tree, i, under);
+        fewest = std::min(fewest, under.size());
+    }
+    return fewest;
+}
+
+TEST_CASE("opencl builder: a node at or below the leaf size is a leaf, without a search") {
+    // 40 triangles in a row along x, each in its own slab with gaps between (one small root): the
+    // full SAH splits nodes of a few triangles; with a leaf size of 8 no inner node has 8 or fewer
+    // triangles under it.
+    std::vector<float> tris;
+    for (int i = 0; i < 40; ++i) {
+        const float x = 3.0f * float(i);
+        tris.insert(tris.end(), {x, 0, 0, x + 0.5f, 0, 1, x, 1, 0});
+    }
+    const Scene scene = make_scene(std::move(tris), "row");
+    BuildParams params;
+    const KdTree searched = build_opencl(test::opencl_test_device(), scene, params);
+    CHECK(fewest_under_inner_node(searched) <= 8);
+    params.small_leaf_refs = 8;
+    const KdTree stopped = build_opencl(test::opencl_test_device(), scene, params);
+    CHECK(check_tree(stopped, scene).empty());
+    CHECK(fewest_under_inner_node(stopped) > 8);
+    CHECK(stopped.nodes.size() < searched.nodes.size());
+    CHECK(count_disagreements(stopped, scene, test::random_rays(scene, 500, 5)) == 0);
 }
 
 TEST_CASE("opencl builder: random scenes of several sizes") {

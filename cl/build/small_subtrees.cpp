@@ -23,7 +23,9 @@ KdSmallBatchArgs SmallBatch::args(const BuildParams& params, cl_uint second_pass
             params.costs.traversal,
             params.costs.intersection,
             params.empty_bonus,
-            {0, 0, 0}};
+            cl_uint(params.small_reclip_refs),
+            cl_uint(params.small_leaf_refs),
+            0};
 }
 
 namespace {

@@ -117,7 +117,8 @@ typedef struct KdPendingNode {
  * writing its nodes in preorder (below child right after its parent, above child after the below
  * subtree, as the output layout wants) to the root's run of subtree_nodes (KdSmallNode records,
  * core/kd_build_shared.h; leaf offsets count from the subtree's first leaf reference). A node
- * becomes a leaf when no split beats C_i N, at the depth limit, or when its box has no area.
+ * becomes a leaf when no split beats C_i N, at the depth limit, when its box has no area, or when
+ * it holds at most a.leaf_size triangles (the cheaper build qualities: no search at all).
  *
  * The first pass gives a root of count references first_scale * (count + 1) records, from
  * first_scale * (the batch's references and roots before it) on. Outputs per root: its node and
@@ -136,6 +137,7 @@ __kernel void kd_build_small_subtrees(
     const uint second_pass = a.second_pass, max_depth = a.max_depth;
     const float cost_traversal = a.cost_traversal, cost_intersection = a.cost_intersection;
     const float empty_bonus = a.empty_bonus;
+    const uint reclip_refs = min(a.reclip_refs, KDRAY_RECLIP_REFS), leaf_size = a.leaf_size;
     if (get_global_id(0) >= a.roots) return;
     const uint q = root_begin + (uint)get_global_id(0);
     const KdSmallRoot root = small_roots[q];
@@ -166,8 +168,9 @@ __kernel void kd_build_small_subtrees(
         if (node.parent != KDRAY_NO_CANDIDATE && node.parent < budget)
             out[node.parent].axis_and_offset = node.parent_axis | (at << 2);
         uint best = KDRAY_NO_CANDIDATE;
-        if (node.mask != 0 && node.depth < max_depth && kd_box_area(node.box) > 0.0f) {
-            if (!node.on_table && popcount(node.mask) <= KDRAY_RECLIP_REFS)
+        const uint node_refs = popcount(node.mask);
+        if (node_refs > leaf_size && node.depth < max_depth && kd_box_area(node.box) > 0.0f) {
+            if (!node.on_table && node_refs <= reclip_refs)
                 node.on_table = kd_clip_node_table(node.box, &node.mask, start, ref_box, ref_tri,
                                                    triangles, &table);
             if (node.on_table)

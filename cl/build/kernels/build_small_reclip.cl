@@ -10,13 +10,12 @@
  * its subtree clips, so a long diagonal triangle that a few splits have cut keeps the root's box:
  * the SAH counts it on both sides of planes it does not reach inside the node, and its own
  * candidates are not its bounds there. A node of at most KDRAY_RECLIP_REFS references of which
- * some extend past its box gets a table of its own: those references' triangles clipped to the
+ * some extend past its box (at most the batch's reclip_refs) gets a table of its own: those references' triangles clipped to the
  * node's box (the large stage's clipping), the candidates and masks of them over the node's
  * references alone, in private memory; its subtree is split with that table. Only the first such
  * node on a path does this (its descendants use its table), so one table per work-item is live:
  * the walk is depth first, and the nodes pending on the stack above a clipped node are all its
- * descendants. */
-#define KDRAY_RECLIP_REFS 32u
+ * descendants. KDRAY_RECLIP_REFS is in kd_build_shared.h; the batch's reclip_refs lowers it. */
 
 typedef struct KdClippedTable {
     float candidates[KDRAY_RECLIP_REFS * 8]; /* per reference: its clipped box's candidate lanes */

@@ -1,0 +1,15 @@
+#include "cli/commands.h"
+
+namespace kdray::cli {
+
+BuildParams BuilderOptions::build_params(BuildQuality default_quality) const {
+    // main.cpp's --quality check admits only the ladder's names.
+    BuildParams p =
+        with_build_quality(params, parse_build_quality(quality).value_or(default_quality));
+    if (large_split_bins) p.large_split_bins = *large_split_bins;
+    if (small_reclip_refs) p.small_reclip_refs = *small_reclip_refs;
+    if (small_leaf_refs) p.small_leaf_refs = *small_leaf_refs;
+    return p;
+}
+
+}  // namespace kdray::cli
