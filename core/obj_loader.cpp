@@ -21,7 +21,7 @@
 
 #include "core/error.h"
 #include "core/input_file.h"
-#include "core/mtl_validate.h"
+#include "core/mtl_prepare.h"
 #include "core/obj_validate.h"
 #include "core/scene.h"
 
@@ -53,8 +53,8 @@ std::filesystem::path library_path(const std::filesystem::path& obj_folder,
 }
 
 /// The MTL libraries as kdray reads every input (input_file.h: regular files only, bounded)
-/// and pre-scans them (mtl_validate.h) before tinyobjloader's LoadMtl parses the same bytes. A
-/// library that does not exist is not loaded (load_obj has warned about it, with its line).
+/// and pre-scans them (mtl_prepare.h) before tinyobjloader's LoadMtl parses what the pass returns.
+/// A library that does not exist is not loaded (load_obj has warned about it, with its line).
 class MtlLibraryReader : public tinyobj::MaterialReader {
   public:
     explicit MtlLibraryReader(std::filesystem::path obj_folder) : folder_(std::move(obj_folder)) {}
@@ -68,8 +68,8 @@ class MtlLibraryReader : public tinyobj::MaterialReader {
             if (warn) *warn += "Material file [ " + name + " ] not found\n";
             return false;
         }
-        const std::string text = read_input_file(path, "MTL file", kMtlSizeLimit);
-        validate_mtl(text, path.string());
+        const std::string text =
+            prepare_mtl(read_input_file(path, "MTL file", kMtlSizeLimit), path.string());
         MemoryStreamBuffer buffer(text);
         std::istream in(&buffer);
         tinyobj::LoadMtl(material_map, materials, &in, warn, err);

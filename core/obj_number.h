@@ -1,5 +1,5 @@
 // obj_number.h — one number of an OBJ or MTL statement, judged as tinyobjloader will read it.
-// The pre-scans (obj_validate, mtl_validate) decide with std::from_chars, which is exact;
+// The pre-scans (obj_validate, mtl_prepare) decide with std::from_chars, which is exact;
 // tinyobjloader computes mantissa · 5^e · 2^e instead, which turns some exact finite values into
 // inf or NaN: `0e725` reads as 0 · inf = NaN (fuzz_mtl found it), and 400 integer digits
 // overflow the mantissa whatever the exponent. Both readers must agree that a number is finite.

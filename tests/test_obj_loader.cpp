@@ -319,6 +319,12 @@ TEST_CASE("MTL numbers are read as tinyobjloader reads them") {
     dir.write("m.mtl", "newmtl m\nKt -0.725 0.71 0\n");
     CHECK_THROWS_WITH_AS(load_obj(path), doctest::Contains("m.mtl:2: Kt value '-0.725' must be"),
                          Error);
+    // tinyobjloader knows no trailing comments: it would read `0.130#` as 0.13 and the eights as
+    // an infinite green (fuzz_mtl). A one-value colour is grey, not (r, 0, 0).
+    dir.write("m.mtl", "newmtl m\nKs  0.130# " + std::string(52, '8') + "M +.eri\nKd 0.5\n");
+    const Scene commented = load_obj(path);
+    CHECK(commented.materials.at(0).specular == Vec3{0.13f, 0.13f, 0.13f});
+    CHECK(commented.materials.at(0).diffuse == Vec3{0.5f, 0.5f, 0.5f});
     dir.write("m.mtl", "newmtl m\nKs 1e999 0 0\n");
     CHECK_THROWS_WITH_AS(load_obj(path),
                          doctest::Contains("m.mtl:2: Ks value '1e999' is not a finite number"),

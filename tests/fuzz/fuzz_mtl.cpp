@@ -1,5 +1,5 @@
-// fuzz_mtl.cpp — libFuzzer target for the MTL pre-scan (validate_mtl) and, behind it,
-// tinyobjloader's LoadMtl on the bytes the pre-scan accepted, as the loader runs them. kdray::Error
+// fuzz_mtl.cpp — libFuzzer target for the MTL pre-scan (prepare_mtl) and, behind it,
+// tinyobjloader's LoadMtl on the text the pre-scan returns, as the loader runs them. kdray::Error
 // is the expected outcome of a bad file; a sanitizer report, another exception, or an accepted file
 // whose materials hold a value the pre-scan promises to reject is a bug.
 #include <tiny_obj_loader.h>
@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "core/mtl_validate.h"
+#include "core/mtl_prepare.h"
 
 namespace {
 
@@ -31,9 +31,9 @@ void check_colour(const tinyobj::real_t* c) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    const std::string text(reinterpret_cast<const char*>(data), size);
+    std::string text;
     try {
-        kdray::validate_mtl(text, "fuzz.mtl");
+        text = kdray::prepare_mtl({reinterpret_cast<const char*>(data), size}, "fuzz.mtl");
     } catch (const kdray::Error&) {
         return 0;
     }
