@@ -4,9 +4,9 @@ namespace kdray {
 namespace {
 
 /// The ladder (docs/quality-ladder.md has the measurements behind each level). high is the
-/// builder at its best: exact SAH over every candidate, re-clipped small nodes. medium stops
-/// searching nodes of 4 triangles or fewer and re-clips only nodes of 16; low stops at 8, never
-/// re-clips and bins large nodes coarser.
+/// builder at its best: exact SAH over every candidate, re-clipped small nodes. medium is high
+/// that stops searching nodes of 4 triangles or fewer (the deep levels hold most of the small
+/// stage's nodes); low stops at 8, never re-clips, and bins large nodes in 8 bins.
 struct Level {
     BuildQuality quality;
     const char* name;
@@ -15,7 +15,7 @@ struct Level {
 
 constexpr Level kLevels[] = {
     {BuildQuality::Low, "low", 8, 0, 8},
-    {BuildQuality::Medium, "medium", 32, 16, 4},
+    {BuildQuality::Medium, "medium", 32, int(KDRAY_RECLIP_REFS), 4},
     {BuildQuality::High, "high", 32, int(KDRAY_RECLIP_REFS), 0},
 };
 

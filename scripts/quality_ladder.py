@@ -12,9 +12,11 @@
 
 From those it names the defaults (`choose_defaults`): for a render of several frames the level
 with the least mean frame time over the animations; for `build` and a single frame, high.
-Writes docs/quality-ladder.json and .md.
+Writes docs/quality-ladder.json and .md, and the ladder as curves in
+docs/accuracy-vs-time/quality_ladder.png (--plot-only redraws them from the JSON).
 
   scripts/quality_ladder.py --kdray build/kdray [--rounds 3] [--repeat 5] [--no-reference]
+  scripts/quality_ladder.py --plot-only
 """
 import argparse
 import datetime
@@ -27,6 +29,7 @@ import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_common import ROOT, SHARED, build_peer, machine_description, median, run_json  # noqa
 from bench_render import primary_only  # noqa
+from accuracy_plots import _pyplot, ensure_matplotlib  # noqa
 
 QUALITIES = ("low", "medium", "high")
 THREADS = os.cpu_count()
@@ -163,6 +166,7 @@ def cell(value, fmt):
 
 def report(result):
     lines = ["# Build-quality ladder", "",
+             "![The ladder as curves](accuracy-vs-time/quality_ladder.png)", "",
              f"Run {result['date']} on {result['machine']}; Embree with {THREADS} threads. "
              "Written by scripts/quality_ladder.py with docs/quality-ladder.json.", "",
              "## Dynamic frames (build + trace, primary rays, 1024x768, warm on both sides)", "",
@@ -204,6 +208,49 @@ def report(result):
     return "\n".join(lines) + "\n"
 
 
+def plot(result, path):
+    """Left: each animation's mean frame, build ms against trace ms, kdray's levels joined low to
+    high and Embree's beside them (lines of equal build + trace dashed). Right: each build scene's
+    SAH against the reference builder's, by build ms."""
+    plt = _pyplot()
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.5))
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    dyn = result["dynamic"]
+    for i, scene in enumerate(dict.fromkeys(r["scene"] for r in dyn)):
+        for side, marker, style in (("kdray", "o", "-"), ("embree", "s", ":")):
+            rows = [r for r in dyn if r["scene"] == scene and r["side"] == side]
+            if not rows:
+                continue
+            left.plot([r["build_ms"] for r in rows], [r["trace_ms"] for r in rows], style,
+                      marker=marker, color=colours[i % len(colours)], label=f"{scene}, {side}")
+            for r in rows:
+                left.annotate(r["quality"], (r["build_ms"], r["trace_ms"]), fontsize=7,
+                              textcoords="offset points", xytext=(3, 3))
+    left.set_xlabel("build ms per frame")
+    left.set_ylabel("trace ms per frame (primary rays)")
+    left.set_title("Dynamic frames, 1024x768")
+    left.legend(fontsize=7)
+    bld = [r for r in result["builds"] if r["side"] == "kdray" and r.get("reference_sah")]
+    for i, scene in enumerate(dict.fromkeys(r["scene"] for r in bld)):
+        rows = [r for r in bld if r["scene"] == scene]
+        right.plot([r["build_ms"] for r in rows], [r["sah_cost"] / r["reference_sah"] for r in rows],
+                   "-o", color=colours[i % len(colours)], label=scene)
+        for r in rows:
+            right.annotate(r["quality"], (r["build_ms"], r["sah_cost"] / r["reference_sah"]),
+                           fontsize=7, textcoords="offset points", xytext=(3, 3))
+        peer = [r["build_ms"] for r in result["builds"]
+                if r["scene"] == scene and r["side"] == "embree" and r["quality"] == "medium"]
+        if peer:
+            right.axvline(peer[0], color=colours[i % len(colours)], linestyle=":", linewidth=1)
+    right.set_xlabel("build ms (dotted: Embree medium)")
+    right.set_ylabel("SAH / reference builder's SAH")
+    right.set_title("Builds")
+    right.legend(fontsize=7)
+    fig.suptitle(f"Build-quality ladder ({result['date']}, scripts/quality_ladder.py)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--kdray", default=os.path.join(ROOT, "build", "kdray"))
@@ -211,7 +258,15 @@ def main():
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--no-reference", action="store_true")
     parser.add_argument("--out", default=os.path.join(ROOT, "docs", "quality-ladder"))
+    parser.add_argument("--plot", default=os.path.join(ROOT, "docs", "accuracy-vs-time",
+                                                       "quality_ladder.png"))
+    parser.add_argument("--plot-only", action="store_true", help="redraw the plot from the JSON")
     args = parser.parse_args()
+    ensure_matplotlib(sys.argv)
+    if args.plot_only:
+        with open(args.out + ".json") as f:
+            plot(json.load(f), args.plot)
+        return
     peer = build_peer()
     with tempfile.TemporaryDirectory(prefix="kdray-ladder-") as tmp:
         dyn = dynamic(args.kdray, peer, args.rounds, tmp)
@@ -223,7 +278,8 @@ def main():
         json.dump(result, f, indent=1)
     with open(args.out + ".md", "w") as f:
         f.write(report(result))
-    print(f"wrote {args.out}.json and .md", file=sys.stderr)
+    plot(result, args.plot)
+    print(f"wrote {args.out}.json and .md, and {args.plot}", file=sys.stderr)
 
 
 if __name__ == "__main__":
