@@ -4,6 +4,7 @@
 // and barycentrics match closed forms on a known triangle.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -288,6 +289,51 @@ TEST_CASE("closed-form distance and barycentrics on a known triangle") {
         CHECK(intersect(tri, make_ray({0.6f, 0.6f, 2.0f}, {0, 0, -1})).prim == KDRAY_NO_HIT);
         CHECK(intersect(tri, make_ray({-0.01f, 0.5f, 2.0f}, {0, 0, -1})).prim == KDRAY_NO_HIT);
     }
+}
+
+TEST_CASE("distances on long thin triangles are exact to a few float ulps") {
+    // Needles 1e4 long and 1e-3 wide, hit near their middle by rays from about 1.6 away: the
+    // watertight test's own t was off by up to 1.5e-4 relative there (a far corner swamps the
+    // sum). The exact distance, in long double from the same float corners and ray, is
+    // n.(p0 - o) / n.d with n from the edges.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    int tested = 0, worst_ulps = 0;
+    for (int i = 0; i < 2000; ++i) {
+        const float y = unit(rng), z = 1e-3f * unit(rng);
+        const Vec3 p0{-5000.0f + unit(rng), y, z}, p1{5000.0f + unit(rng), y + 1e-3f, z},
+            p2{5000.0f + unit(rng), y, z + 1e-3f * (0.5f + unit(rng))};
+        const std::vector<float> tri = {p0.x, p0.y, p0.z, p1.x, p1.y, p1.z, p2.x, p2.y, p2.z};
+        // Aim at a point inside: barycentrics (a, b) of p1 and p2.
+        const float a = 0.3f + 0.2f * unit(rng), b = 0.2f * unit(rng);
+        const Vec3 target = p0 + (p1 - p0) * a + (p2 - p0) * b;
+        // Mostly along the needle: its far corners are then far along the ray's own axis, where
+        // the watertight test's t sums them.
+        const float along = unit(rng) < 0.5f ? -1.0f : 1.0f;
+        const Vec3 dir = normalize(Vec3{along, -0.5f + 0.2f * (unit(rng) - 0.5f),
+                                        0.5f + 0.2f * (unit(rng) - 0.5f)});
+        const Vec3 org = target - dir * 1.632f;
+        const KdHit h = intersect(tri, make_ray(org, dir));
+        // About half of these rays miss: seen along its length a needle 1e-3 wide is a few
+        // float spacings of its 5000-away corners wide in ray space, and the inside test is the
+        // float one (watertight). The distances of the hits are what this test is about.
+        if (h.prim != 0) continue;
+        ++tested;
+        using L = long double;
+        const L e1[3] = {L(p1.x) - p0.x, L(p1.y) - p0.y, L(p1.z) - p0.z};
+        const L e2[3] = {L(p2.x) - p0.x, L(p2.y) - p0.y, L(p2.z) - p0.z};
+        const L n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                        e1[0] * e2[1] - e1[1] * e2[0]};
+        const L exact =
+            (n[0] * (L(p0.x) - org.x) + n[1] * (L(p0.y) - org.y) + n[2] * (L(p0.z) - org.z)) /
+            (n[0] * dir.x + n[1] * dir.y + n[2] * dir.z);
+        const float ulp = std::nextafter(float(exact), INFINITY) - float(exact);
+        worst_ulps = std::max(worst_ulps, int(std::fabs(L(h.t) - exact) / ulp + 0.5L));
+    }
+    CAPTURE(tested);
+    CHECK(tested > 500);
+    CAPTURE(worst_ulps);
+    CHECK(worst_ulps <= 2);
 }
 
 TEST_CASE("the hit must lie in [tmin, best)") {

@@ -60,6 +60,26 @@ inline float16 kd_packet_pick(int16 k, __global const float* c) {
     return select(select((float16)(c[2]), (float16)(c[1]), k == 1), (float16)(c[0]), k == 0);
 }
 
+/* kd_plane_distance for the lanes in `lanes`, lane by lane through the scalar function, so that a
+ * packet's distances are the single ray's bit for bit; `fallback` elsewhere. Only the lanes whose
+ * ray passes inside the triangle get here. */
+inline float16 kd_packet_plane_distance(const KdPacket* p, __global const float* tri, int16 lanes,
+                                        float16 fallback) {
+    float t[16], o[3][16], d[3][16];
+    int in[16];
+    vstore16(fallback, 0, t);
+    vstore16(lanes, 0, in);
+    for (int a = 0; a < 3; ++a) {
+        vstore16(p->org[a], 0, o[a]);
+        vstore16(p->dir[a], 0, d[a]);
+    }
+    for (int lane = 0; lane < 16; ++lane)
+        if (in[lane])
+            t[lane] = kd_plane_distance(tri, o[0][lane], o[1][lane], o[2][lane], d[0][lane],
+                                        d[1][lane], d[2][lane], t[lane]);
+    return vload16(0, t);
+}
+
 /* kd_intersect_triangle for the lanes in `active`, operation for operation: a lane whose test
  * accepts the triangle takes it as its best hit. */
 KDRAY_HOT_INLINE void kd_packet_intersect(const KdPacket* p, __global const float* tri, uint id,
@@ -96,14 +116,9 @@ KDRAY_HOT_INLINE void kd_packet_intersect(const KdPacket* p, __global const floa
     ok &= det != 0.0f;
     if (!KDRAY_PACKET_ANY(ok)) return;
     const float16 az = p->sz * a_z, bz = p->sz * b_z, cz = p->sz * c_z;
-    const float16 t_scaled = u * az + v * bz + w * cz;
-    const float16 sign = select((float16)(1.0f), (float16)(-1.0f), det < 0.0f);
-    const float16 abs_det = det * sign, t_abs = t_scaled * sign;
-    ok &= ~((t_abs < p->tmin * abs_det) | (t_abs >= best->t * abs_det));
-    if (!KDRAY_PACKET_ANY(ok)) return;
     const float16 inv_det = 1.0f / det;
-    const float16 t = t_scaled * inv_det;
-    ok &= ~((t < p->tmin) | (t >= best->t));
+    const float16 t = kd_packet_plane_distance(p, tri, ok, (u * az + v * bz + w * cz) * inv_det);
+    ok &= (t >= p->tmin) & (t < best->t);
     best->t = select(best->t, t, ok);
     best->prim = select(best->prim, (uint16)(id), as_uint16(ok));
     best->u = select(best->u, v * inv_det, ok);
