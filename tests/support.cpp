@@ -50,6 +50,25 @@ Scene long_slivers(int count, std::uint32_t seed) {
     return make_scene(std::move(tris), "long_slivers");
 }
 
+Scene needles(int count, std::uint32_t seed) {
+    // 1e4 long, 1e-3 wide, in random directions through a 10-unit box: the triangles whose
+    // distances the watertight test's own t got wrong (kd_plane_distance) and that every large
+    // node's split clips.
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> pos(0.0f, 10.0f);
+    std::normal_distribution<float> normal;
+    auto direction = [&] {
+        const Vec3 d{normal(rng), normal(rng), normal(rng)};
+        return d * (1.0f / length(d));
+    };
+    std::vector<float> tris;
+    for (int i = 0; i < count; ++i) {
+        const Vec3 c{pos(rng), pos(rng), pos(rng)}, along = direction(), across = direction();
+        push_triangle(tris, c - along * 5000.0f, c + along * 5000.0f, c + across * 1e-3f);
+    }
+    return make_scene(std::move(tris), "needles");
+}
+
 Scene planar_triangles(int count, std::uint32_t seed) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> pos(0.0f, 1.0f), jitter(-0.05f, 0.05f);

@@ -20,6 +20,8 @@ Scene random_triangles(int count, std::uint32_t seed, float extent = 1.0f, float
 /// Long thin triangles (1 long, at most 0.02 wide) in random directions, centred in the unit
 /// cube: each crosses many of the nodes that a small root of them splits into.
 Scene long_slivers(int count, std::uint32_t seed);
+/// Triangles 1e4 long and 1e-3 wide through a 10-unit box.
+Scene needles(int count, std::uint32_t seed);
 /// All triangles in the plane z = 0: the root is flat, every node below it too.
 Scene planar_triangles(int count, std::uint32_t seed);
 /// n^3 axis-aligned unit cubes on a lattice of spacing 2: triangles lie exactly on the candidate
