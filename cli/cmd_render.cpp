@@ -103,6 +103,26 @@ extern "C" void on_interrupt(int signal) {
 
 }  // namespace
 
+/// The command line's overrides of the render file (--spp, --size, --ray-depth) applied to
+/// `settings`; returns what each set, for stats.json.
+nlohmann::json apply_overrides(const RenderCommand& command, RenderSettings& settings) {
+    nlohmann::json used = nlohmann::json::object();
+    if (command.spp) used["spp"] = settings.spp = *command.spp;
+    if (command.ray_depth) used["ray_depth"] = settings.max_depth = *command.ray_depth;
+    if (!command.size.empty()) {
+        int width = 0, height = 0;
+        char x = 0, rest = 0;
+        if (std::sscanf(command.size.c_str(), "%d%c%d%c", &width, &x, &height, &rest) != 3 ||
+            (x != 'x' && x != 'X') || width < 1 || height < 1 || width > 65536 || height > 65536)
+            throw UsageError("--size " + command.size +
+                             ": expected WIDTHxHEIGHT, each from 1 to 65536 (e.g. 320x240)");
+        settings.width = width;
+        settings.height = height;
+        used["size"] = command.size;
+    }
+    return used;
+}
+
 int run_render(const RenderCommand& command) {
     // Check everything that can be checked before the first frame costs time.
     std::vector<std::string> inputs = expand_inputs(command.inputs);
@@ -114,6 +134,7 @@ int run_render(const RenderCommand& command) {
     check_output_names(inputs, selected, command);
     RenderSettings settings;
     if (!command.render_file.empty()) settings = load_render_file(command.render_file);
+    const nlohmann::json overrides = apply_overrides(command, settings);
     // Every frame's camera, interpolated between valid keys, must have a basis too: checked
     // before the first frame costs time.
     if (settings.camera_given)
@@ -203,6 +224,7 @@ int run_render(const RenderCommand& command) {
         {"render_file", command.render_file},
         {"image", {{"width", settings.width}, {"height", settings.height}, {"spp", settings.spp}}},
         {"max_depth", settings.max_depth},
+        {"overrides", overrides},
         {"intersect", command.intersect},
         {"packets", command.packets},
         {"frames", frames},

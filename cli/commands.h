@@ -19,6 +19,7 @@ struct BuilderOptions {
     std::string quality;             // low, medium, high; empty: the command's default
     // Set by the user apart from the quality (--large-bins, --reclip-refs, --leaf-refs).
     std::optional<int> large_split_bins, small_reclip_refs, small_leaf_refs;
+    std::string retired_max_depth;  // `--max-depth`, refused by its check (main.cpp)
 
     /// params at `quality` (default_quality when none was given), with the ladder options the
     /// user set kept.
@@ -37,6 +38,9 @@ struct RenderCommand {
     std::vector<std::string> inputs;
     std::string output_dir;
     std::string render_file;
+    // Overrides of the render file: image.spp, image.width x image.height, max_depth.
+    std::optional<int> spp, ray_depth;
+    std::string size;  // WIDTHxHEIGHT
     bool aov = false;
     std::string format = "png";
     std::string tracer = "opencl";

@@ -20,13 +20,17 @@ namespace {
 
 using namespace kdray::cli;
 
+/// The tree's options (group "Tree") and the device's ("Device"). `--max-depth` is refused with
+/// the names that replace it: on render it read as the ray depth and set the tree's.
 void add_builder_options(CLI::App& app, BuilderOptions& o) {
-    app.add_option("--builder", o.builder, "kd-tree builder")
-        ->check(CLI::IsMember({"opencl", "reference"}))
-        ->capture_default_str();
+    app.option_defaults()->group("Device");
     app.add_option("--device", o.device,
                    "OpenCL device: an index from `kdray stats` or a name substring "
                    "(default: the first GPU, else the first device)");
+    app.option_defaults()->group("Tree");
+    app.add_option("--builder", o.builder, "kd-tree builder")
+        ->check(CLI::IsMember({"opencl", "reference"}))
+        ->capture_default_str();
     app.add_option("--ct", o.params.costs.traversal, "SAH cost of a traversal step, C_t")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
@@ -64,9 +68,11 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
                    "OpenCL builder: a small node of at most this many triangles is a leaf "
                    "without an SAH search (0: search every node). Default: by --quality")
         ->check(CLI::Range(0, KDRAY_SMALL_ROOT_MAX_REFS));
-    app.add_option("--max-depth", o.params.max_depth, "deepest tree level")
+    app.add_option("--tree-depth", o.params.max_depth, "deepest kd-tree level")
         ->check(CLI::Range(1, KDRAY_MAX_DEPTH))
         ->capture_default_str();
+    app.add_option("--max-depth", o.retired_max_depth)->group("");  // refused after parsing
+    app.option_defaults()->group("Options");
 }
 
 }  // namespace
@@ -111,19 +117,31 @@ int main(int argc, char** argv) {
         app.add_subcommand("render", "Build and trace every frame; write images and stats.json");
     render_app->add_option("frames", render.inputs, "OBJ frames (files or globs), natural order")
         ->required();
-    render_app->add_option("-o,--output", render.output_dir, "output folder")->required();
+    render_app->option_defaults()->group("Image");
     render_app->add_option("--camera", render.render_file,
                            "render file (JSON, see conventions); default: frame the scene");
+    render_app->add_option("--spp", render.spp, "samples per pixel (overrides the render file)")
+        ->check(CLI::Range(1, 65536));
+    render_app->add_option("--size", render.size,
+                           "image size WIDTHxHEIGHT, e.g. 320x240 (overrides the render file)");
+    render_app
+        ->add_option("--ray-depth", render.ray_depth,
+                     "most bounces of a path: the render file's max_depth (overrides it)")
+        ->check(CLI::Range(1, 1024));
+    render_app->option_defaults()->group("Output");
+    render_app->add_option("-o,--output", render.output_dir, "output folder")->required();
     render_app->add_flag("--aov", render.aov, "also write <stem>.aov.exr (Z, prim_id, N)");
     render_app->add_option("--format", render.format, "image format")
         ->check(CLI::IsMember({"png", "exr"}))
         ->capture_default_str();
+    render_app->option_defaults()->group("Tracer");
     render_app->add_option("--tracer", render.tracer, "ray tracer")
         ->check(CLI::IsMember({"opencl", "reference"}))
         ->capture_default_str();
     render_app
         ->add_option("--threads", render.threads, "CPU threads for the reference tracer (0: all)")
         ->check(CLI::NonNegativeNumber);
+    render_app->option_defaults()->group("Output");
     render_app->add_flag("-q,--quiet", render.quiet, "no progress line");
     render_app->add_flag("--keep-going", render.keep_going,
                          "after a bad frame, render the rest; exit 1 with the failed frames "
@@ -131,6 +149,7 @@ int main(int argc, char** argv) {
     render_app->add_flag("--warm-up", render.warm_up,
                          "benchmarks: build and trace the first frame once, untimed, so that "
                          "program builds and first launches stay out of the frame times");
+    render_app->option_defaults()->group("Tracer");
     render_app
         ->add_option("--intersect", render.intersect,
                      "ray-triangle test: watertight (Woop et al. 2013: no ray slips through a "
@@ -145,6 +164,7 @@ int main(int argc, char** argv) {
                      "are the same)")
         ->check(CLI::IsMember({"auto", "on", "off"}))
         ->capture_default_str();
+    render_app->option_defaults()->group("Frames");
     render_app->add_option("--frames", render.frames,
                            "render only frames START:END[:STEP] (END included; frame numbers are "
                            "positions in the naturally sorted inputs)");
@@ -170,6 +190,14 @@ int main(int argc, char** argv) {
         std::cerr << "kdray: error: " << e.what() << " (see kdray --help)\n";
         return 2;
     }
+
+    for (const BuilderOptions* o : {&build.builder, &render.builder, &stats.builder})
+        if (!o->retired_max_depth.empty()) {
+            std::cerr << "kdray: error: --max-depth is gone: --tree-depth sets the kd-tree's depth "
+                         "limit; on render, --ray-depth the render file's max_depth (see kdray "
+                         "--help)\n";
+            return 2;
+        }
 
     // CLI11's checks let nan through (every comparison with it is false) and a float option
     // overflows to inf: the one parameter check decides, as a usage error.

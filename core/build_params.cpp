@@ -41,7 +41,7 @@ void validate_build_params(const BuildParams& p) {
         reject("the small-node leaf size", "--leaf-refs", p.small_leaf_refs,
                "an integer from 0 to 64");
     if (p.max_depth < 0 || p.max_depth > KDRAY_MAX_DEPTH)
-        reject("the tree depth limit", "--max-depth", p.max_depth, "an integer from 0 to 64");
+        reject("the tree depth limit", "--tree-depth", p.max_depth, "an integer from 0 to 64");
 }
 
 }  // namespace kdray

@@ -165,6 +165,43 @@ TEST_CASE("--quality: the ladder's parameters, each command's default, options s
     fs::remove_all(dir);
 }
 
+TEST_CASE("render overrides --spp, --size and --ray-depth; --max-depth is refused by name") {
+    fs::path dir = fresh_temp_dir("cli-overrides");
+    const fs::path obj = write_obj(dir / "scene.obj", random_triangles(200, 14));
+    const fs::path render = write_text_file(dir / "render.json", kSmallRender);  // 48x32, spp 1
+    CommandResult r =
+        run_kdray({"render", obj.string(), "-o", (dir / "out").string(), "--camera",
+                   render.string(), "--aov", "--spp", "2", "--size", "16x8", "--ray-depth", "1",
+                   "--builder", "reference", "--tracer", "reference", "-q"});
+    REQUIRE_MESSAGE(r.status == 0, r.err);
+    const nlohmann::json stats = read_json(dir / "out" / "stats.json");
+    CHECK(stats["image"]["width"] == 16);
+    CHECK(stats["image"]["height"] == 8);
+    CHECK(stats["image"]["spp"] == 2);
+    CHECK(stats["max_depth"] == 1);
+    CHECK(stats["overrides"]["size"] == "16x8");
+    CHECK(stats["overrides"]["spp"] == 2);
+    CHECK(stats["overrides"]["ray_depth"] == 1);
+    const HitBuffer aov = read_aov(dir / "out" / "scene.aov.exr");
+    CHECK(aov.width == 16);
+    CHECK(aov.height == 8);
+    CHECK(stats["frames"][0]["rays"]["reflection"] == 0);
+    for (const char* size : {"16", "16x", "0x8", "16x8x2", "axb"}) {
+        CAPTURE(size);
+        r = run_kdray({"render", obj.string(), "-o", (dir / "bad").string(), "--size", size});
+        CHECK(r.status == 2);
+        CHECK(r.err.find("--size") != std::string::npos);
+    }
+    for (const char* command : {"build", "render"}) {
+        r = run_kdray({command, obj.string(), "-o", (dir / "x").string(), "--max-depth", "3"});
+        CHECK(r.status == 2);
+        CHECK(r.err.find("--tree-depth") != std::string::npos);
+        CHECK(r.err.find("--ray-depth") != std::string::npos);
+    }
+    CHECK(!fs::exists(dir / "bad"));
+    fs::remove_all(dir);
+}
+
 TEST_CASE("kdray render writes images, AOVs that agree with brute force, and stats.json") {
     fs::path dir = fresh_temp_dir("cli-render");
     Scene scene = random_triangles(400, 12);
