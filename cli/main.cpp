@@ -7,10 +7,12 @@
 #include <malloc.h>
 #endif
 
+#include <algorithm>
 #include <exception>
 #include <iostream>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "cli/commands.h"
 #include "core/error.h"
@@ -90,6 +92,43 @@ void keep_freed_memory_for_reuse() {
     mallopt(M_MMAP_THRESHOLD, 32 << 20);
     mallopt(M_TRIM_THRESHOLD, 512 << 20);
 #endif
+}
+
+/// Levenshtein distance, for "did you mean".
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        std::size_t diagonal = row[0];
+        row[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            const std::size_t up = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
+            diagonal = up;
+        }
+    }
+    return row[b.size()];
+}
+
+/// "did you mean ..." with the names of `app` (its subcommands or its options) nearest to
+/// `given`, or "" when none is near (at most 2 edits, or a third of the name).
+std::string nearest_name(const std::string& given, const std::vector<std::string>& names) {
+    std::string best;
+    std::size_t best_distance = std::max<std::size_t>(2, given.size() / 3) + 1;
+    for (const std::string& name : names)
+        if (const std::size_t d = edit_distance(given, name); d < best_distance) {
+            best_distance = d;
+            best = name;
+        }
+    return best.empty() ? "" : "; did you mean '" + best + "'?";
+}
+
+/// Every long option name of `app`, with its dashes.
+std::vector<std::string> long_option_names(const CLI::App& app) {
+    std::vector<std::string> names;
+    for (const CLI::Option* o : app.get_options())
+        for (const std::string& n : o->get_lnames()) names.push_back("--" + n);
+    return names;
 }
 
 }  // namespace
@@ -187,7 +226,25 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
         // --help and --version are "errors" that succeed; every other one is a usage error.
         if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-        std::cerr << "kdray: error: " << e.what() << " (see kdray --help)\n";
+        // A mistyped subcommand or option gets the nearest valid name.
+        std::string hint;
+        const std::string first = argc > 1 ? argv[1] : "";
+        if (!first.empty() && first[0] != '-' && first != "build" && first != "render" &&
+            first != "stats")
+            hint = "'" + first + "' is not a command" +
+                   nearest_name(first, {"build", "render", "stats"});
+        for (const CLI::App* sub : {build_app, render_app, stats_app})
+            if (sub->parsed())
+                for (int i = 2; i < argc && hint.empty(); ++i) {
+                    std::string arg = argv[i];
+                    arg = arg.substr(0, arg.find('='));
+                    if (arg.rfind("--", 0) == 0 && !sub->get_option_no_throw(arg))
+                        if (const std::string near = nearest_name(arg, long_option_names(*sub));
+                            !near.empty())
+                            hint = "unknown option '" + arg + "'" + near;
+                }
+        std::cerr << "kdray: error: " << (hint.empty() ? std::string(e.what()) : hint)
+                  << " (see kdray --help)\n";
         return 2;
     }
 

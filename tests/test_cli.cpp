@@ -165,6 +165,27 @@ TEST_CASE("--quality: the ladder's parameters, each command's default, options s
     fs::remove_all(dir);
 }
 
+TEST_CASE("a mistyped command or option is answered with the nearest valid name") {
+    struct Case {
+        std::vector<std::string> args;
+        const char* hint;
+    };
+    for (const Case& c :
+         {Case{{"rendr", "x.obj"}, "'rendr' is not a command; did you mean 'render'?"},
+          Case{{"biuld", "x.obj"}, "did you mean 'build'?"},
+          Case{{"render", "x.obj", "-o", "y", "--sp", "3"}, "did you mean '--spp'?"},
+          Case{{"build", "x.obj", "--qualty", "low"}, "did you mean '--quality'?"}}) {
+        CAPTURE(c.hint);
+        const CommandResult r = run_kdray(c.args);
+        CHECK(r.status == 2);
+        CHECK(r.err.find(c.hint) != std::string::npos);
+    }
+    // Nothing near: no guess.
+    const CommandResult far = run_kdray({"frobnicate"});
+    CHECK(far.status == 2);
+    CHECK(far.err.find("did you mean") == std::string::npos);
+}
+
 TEST_CASE("render overrides --spp, --size and --ray-depth; --max-depth is refused by name") {
     fs::path dir = fresh_temp_dir("cli-overrides");
     const fs::path obj = write_obj(dir / "scene.obj", random_triangles(200, 14));
