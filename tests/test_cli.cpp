@@ -117,6 +117,10 @@ TEST_CASE("kdray build --json reports the tree the reference builder makes in-pr
     nlohmann::json j = nlohmann::json::parse(r.out);
     for (const char* key : {"nodes", "leaves", "sah_cost", "build_ms", "timings_ms", "max_depth"})
         CHECK_MESSAGE(j.contains(key), key);
+    // Beside the build: the load, and a preparation that builds no program (the reference).
+    CHECK(j["load_ms"].get<double>() > 0.0);
+    CHECK(j["prepare_ms"].get<double>() >= 0.0);
+    CHECK(j["compile_ms"] == 0.0);
 
     KdTree expected = build_reference(load_obj(obj));
     CHECK(j["nodes"].get<std::size_t>() == expected.nodes.size());
