@@ -5,8 +5,10 @@
 #include <vector>
 
 #include "cl/backends.h"
+#include "cl/runtime/program_cache.h"
 #include "cli/commands.h"
 #include "cli/report.h"
+#include "core/frame_pipeline.h"
 #include "core/scene.h"
 #include "core/stats_json.h"
 #include "core/tree_file.h"
@@ -14,11 +16,19 @@
 namespace kdray::cli {
 
 int run_build(const BuildCommand& command) {
+    // What the process does beside the build, timed so that a cold figure adds up: the OBJ
+    // loaded, then the device opened and the builder prepared (its programs built). Loading on a
+    // thread beside the preparation gained nothing on 2 cores (each slowed the other: Kitchen
+    // process 994 -> 1010 ms, dragon res2 1217 -> 1266, medians of 8 alternating runs).
+    const auto load_start = FrameClock::now();
     Scene scene = load_obj(command.scene);
+    const double load_ms = ms_since(load_start);
+    const auto prepare_start = FrameClock::now();
     DeviceSession session(command.builder.device);
     const std::unique_ptr<TreeBuilder> builder = make_tree_builder(
         command.builder.builder, command.builder.build_params(kStaticBuildQuality), session);
     builder->prepare();
+    const double prepare_ms = ms_since(prepare_start);
     BuiltTree built = builder->build(scene);
     std::vector<double> samples;
     if (command.repeat > 1) {
@@ -35,6 +45,9 @@ int run_build(const BuildCommand& command) {
 
     nlohmann::json report = tree_json(built, scene.triangle_count());
     report["scene"] = scene_json(scene);
+    report["load_ms"] = load_ms;
+    report["prepare_ms"] = prepare_ms;
+    report["compile_ms"] = compile_ms_total();  // of prepare_ms: the programs built
     if (!samples.empty()) report["build_ms_samples"] = samples;
     if (!command.output.empty()) report["tree_file"] = command.output;
     if (command.json) {

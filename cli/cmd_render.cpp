@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "cl/backends.h"
+#include "cl/runtime/program_cache.h"
 #include "cli/commands.h"
 #include "cli/frame_selection.h"
 #include "cli/inputs.h"
@@ -50,9 +51,10 @@ void show_progress(std::size_t done, std::size_t total, double elapsed_ms) {
 }
 
 /// The frame options the command line gives: output folder and format, --aov, --intersect,
-/// --packets.
+/// --packets; and the clock of compilation that a frame's compile_ms reads.
 FrameOptions frame_options(const RenderCommand& command) {
     FrameOptions options;
+    options.compile_ms_so_far = compile_ms_total;
     options.out_dir = command.output_dir;
     options.format = command.format;
     options.aov = command.aov;
@@ -124,6 +126,7 @@ nlohmann::json apply_overrides(const RenderCommand& command, RenderSettings& set
 }
 
 int run_render(const RenderCommand& command) {
+    const auto setup_start = FrameClock::now();
     // Check everything that can be checked before the first frame costs time.
     std::vector<std::string> inputs = expand_inputs(command.inputs);
     const std::vector<std::size_t> selected =
@@ -158,7 +161,7 @@ int run_render(const RenderCommand& command) {
                                                                            : kStaticBuildQuality),
                           session);
     const std::unique_ptr<Tracer> tracer = make_tracer(command.tracer, command.threads, session);
-    builder->prepare();
+    // The builder's programs are built in the first frame (its compile_ms), not here.
     FramePipeline pipeline(*builder, *tracer, settings, frame_options(command));
     const std::filesystem::path out_dir = command.output_dir;
     create_output_dir(out_dir);
@@ -166,29 +169,40 @@ int run_render(const RenderCommand& command) {
     // A closed terminal or a killed ssh session (SIGHUP) stops the run as Ctrl-C does.
     for (const int signal : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal, on_interrupt);
 
-    if (command.warm_up) {
-        // Benchmarks: the first frame once through the same pipeline, untimed and unwritten, so
-        // that program builds and first-launch costs stay out of every frame's figures.
-        const std::size_t first = selected[0];
-        const Scene scene = load_obj(inputs[first]);
-        pipeline.render_frame({first, inputs[first], &scene}, FramePipeline::Output::Discard);
-    }
-
     // The next frame's OBJ loads on another thread. With the build and the trace on a GPU it
     // overlaps them; when they run on the host's own cores (a CPU device, the reference code) a
     // loader beside them only preempts their workers (the Kitchen's large stage: 33 -> 48 ms on
     // 2 cores), so it overlaps writing the files instead.
     const bool compute_on_host = builder->computes_on_host() || tracer->computes_on_host();
+    using LoadedScene = std::pair<Scene, double>;  // the scene and its load's own duration
     auto load_async = [&](std::size_t frame) {
         return std::async(std::launch::async, [path = inputs[frame]] {
             auto start = FrameClock::now();
             Scene scene = load_obj(path);
-            return std::make_pair(std::move(scene), ms_since(start));
+            return LoadedScene(std::move(scene), ms_since(start));
         });
     };
+    std::future<LoadedScene> next_scene = load_async(selected[0]);
+    const double setup_ms = ms_since(setup_start);
+
+    double warm_up_ms = 0;
+    if (command.warm_up) {
+        // Benchmarks: the first frame once through the same pipeline, untimed and unwritten, so
+        // that program builds and first-launch costs stay out of every frame's figures. Its
+        // scene is the run's first frame's: the OBJ is read once, and that frame waits for none.
+        const auto warm_up_start = FrameClock::now();
+        const std::size_t first = selected[0];
+        LoadedScene loaded = next_scene.get();
+        pipeline.render_frame({first, inputs[first], &loaded.first},
+                              FramePipeline::Output::Discard);
+        std::promise<LoadedScene> ready;
+        ready.set_value(std::move(loaded));
+        next_scene = ready.get_future();
+        warm_up_ms = ms_since(warm_up_start);
+    }
+
     nlohmann::json frames = nlohmann::json::array(), failures = nlohmann::json::array();
     auto run_start = FrameClock::now();
-    auto next_scene = load_async(selected[0]);
     std::size_t done = 0;
     for (; done < selected.size() && !interrupted; ++done) {
         const std::size_t i = selected[done];
@@ -202,8 +216,10 @@ int run_render(const RenderCommand& command) {
             };
             if (!compute_on_host) load_next();
             auto [scene, load_ms] = pending.get();
-            frames.push_back(pipeline.render_frame({i, inputs[i], &scene, load_ms, frame_start},
-                                                   FramePipeline::Output::Write, load_next));
+            const double load_wait_ms = ms_since(frame_start);
+            frames.push_back(
+                pipeline.render_frame({i, inputs[i], &scene, load_ms, load_wait_ms, frame_start},
+                                      FramePipeline::Output::Write, load_next));
             for (const std::string& warning : scene.warnings)
                 std::cerr << "kdray: warning: " << warning << "\n";
         } catch (const Error& e) {
@@ -227,8 +243,11 @@ int run_render(const RenderCommand& command) {
         {"overrides", overrides},
         {"intersect", command.intersect},
         {"packets", command.packets},
+        // Before the first frame: the inputs checked, the device opened, the first load started.
+        {"setup_ms", setup_ms},
         {"frames", frames},
         {"summary", summarise_frames(frames)}};
+    if (command.warm_up) stats["warm_up_ms"] = warm_up_ms;
     if (!failures.empty()) stats["failed_frames"] = failures;
     if (interrupted) stats["interrupted_after_frames"] = frames.size();
     if (!frames.empty()) write_file_atomically(out_dir / "stats.json", json_text(stats) + "\n");

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <vector>
 
 #include "cl/backends.h"
 #include "cli/commands.h"
@@ -58,7 +59,8 @@ nlohmann::json read_render_stats(const std::filesystem::path& dir) {
         if (!frame.is_object()) throw Error(where + " is not an object");
         if (frame.contains("frame") && !frame["frame"].is_number_unsigned())
             throw Error(where + ".frame is " + frame["frame"].dump() + ", not a frame number");
-        for (const char* key : {"frame_ms", "build_ms", "trace_ms"})
+        for (const char* key : {"frame_ms", "load_ms", "load_wait_ms", "compile_ms", "build_ms",
+                                "trace_ms", "write_ms", "other_ms"})
             if (frame.contains(key) && !frame[key].is_number())
                 throw Error(where + "." + key + " is " + frame[key].dump() + ", not a number");
     }
@@ -102,16 +104,13 @@ int run_stats(const StatsCommand& command) {
         nlohmann::json items = nlohmann::json::array();
         for (const std::string& path : command.paths) items.push_back(path_json(path, *builder));
         out = command.paths.size() == 1 ? items[0] : nlohmann::json{{"items", items}};
-        // Several render folders are the shards of one animation: one summary over them all.
-        nlohmann::json frames = nlohmann::json::array();
-        std::size_t folders = 0;
-        for (const std::string& path : command.paths) {
-            if (!std::filesystem::is_directory(path)) continue;
-            for (const nlohmann::json& frame : read_render_stats(path)["frames"])
-                frames.push_back(frame);
-            ++folders;
-        }
-        if (folders > 1) out["combined"] = summarise_frames(frames);
+        // Several render folders are the shards of one animation: one summary over them all,
+        // each shard a run of its own (with its own first frame).
+        std::vector<nlohmann::json> runs;
+        for (const std::string& path : command.paths)
+            if (std::filesystem::is_directory(path))
+                runs.push_back(read_render_stats(path)["frames"]);
+        if (runs.size() > 1) out["combined"] = summarise_runs(runs);
     }
     if (command.json) {
         std::cout << json_text(out) << "\n";

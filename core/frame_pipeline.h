@@ -2,6 +2,11 @@
 // the scene loaded, its tree built, the frame traced, the image (and the hit AOV) written, and
 // the frame's stats.json record. The run and its warm-up go through the same render_frame; the
 // warm-up only writes nothing.
+//
+// A record's times add up: frame_ms = load_wait_ms + compile_ms + build_ms + trace_ms + write_ms
+// + other_ms, each a separate stretch of the frame's own wall time. load_ms is not one of them:
+// it is the load's own duration, mostly spent on another thread while the frame before rendered;
+// what the frame itself waited for its scene is load_wait_ms.
 #pragma once
 
 #include <chrono>
@@ -33,15 +38,21 @@ struct FrameOptions {
     bool aov = false;            // also <stem>.aov.exr; the hits then carry their normals
     kd_u32 intersect = KDRAY_INTERSECT_WATERTIGHT;  // KDRAY_INTERSECT_*
     RenderInputs::Packets packets = RenderInputs::Packets::Auto;
+    /// The process's milliseconds of compilation so far (the OpenCL program cache's
+    /// compile_ms_total); a frame's compile_ms is how much it grew while the frame prepared the
+    /// builder and the tracer. Empty: the backends compile nothing.
+    std::function<double()> compile_ms_so_far;
 };
 
 /// One frame: its number (its position in the run's naturally sorted inputs), its OBJ, the scene
-/// loaded from it and how long that took, and when the frame began (frame_ms counts from there).
+/// loaded from it, how long the load took and how much of that the frame waited for, and when
+/// the frame began (frame_ms counts from there; the wait is its first load_wait_ms).
 struct FrameJob {
     std::size_t number = 0;
     std::string input;
     const Scene* scene = nullptr;
     double load_ms = 0;
+    double load_wait_ms = 0;
     FrameClock::time_point start = FrameClock::now();
 };
 
@@ -53,10 +64,11 @@ class FramePipeline {
                   FrameOptions options);
 
     /// Builds and traces `job`'s frame and, with Output::Write, writes its files; returns its
-    /// stats.json record. The tracer's program for the frame's effects is prepared outside
-    /// trace_ms. `computed`, when given, runs once the build and the trace are done, before the
-    /// files are written. Without a camera in the render file, frames are framed on the scene of
-    /// the first frame that completes (Write). Throws Error from any stage.
+    /// stats.json record. The builder and the tracer are prepared (their programs built, the
+    /// first frame's compile_ms) outside build_ms and trace_ms. `computed`, when given, runs once
+    /// the build and the trace are done, before the files are written. Without a camera in the
+    /// render file, frames are framed on the scene of the first frame that completes (Write).
+    /// Throws Error from any stage.
     nlohmann::json render_frame(const FrameJob& job, Output output = Output::Write,
                                 const std::function<void()>& computed = {});
 

@@ -1,6 +1,8 @@
 #include "core/stats_json.h"
 
 #include <algorithm>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "core/build_quality.h"
@@ -50,30 +52,44 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
     return j;
 }
 
-nlohmann::json summarise_frames(const nlohmann::json& frames) {
-    double total_ms = 0, worst_ms = 0, build_ms = 0, trace_ms = 0;
+nlohmann::json summarise_runs(const std::vector<nlohmann::json>& runs) {
+    // Totals over every frame, and frame_ms over the frames after each run's first.
+    const char* parts[] = {"load_wait_ms", "compile_ms", "build_ms", "trace_ms", "write_ms"};
+    std::map<std::string, double> part_totals;
+    double total_ms = 0, worst_ms = 0, after_first_ms = 0;
+    std::size_t after_first = 0;
     std::vector<std::size_t> numbers;
-    for (const nlohmann::json& frame : frames) {
-        const double ms = frame.value("frame_ms", 0.0);
-        total_ms += ms;
-        worst_ms = std::max(worst_ms, ms);
-        build_ms += frame.value("build_ms", 0.0);
-        trace_ms += frame.value("trace_ms", 0.0);
-        numbers.push_back(frame.value("frame", std::size_t(0)));
-    }
+    for (const nlohmann::json& frames : runs)
+        for (std::size_t k = 0; k < frames.size(); ++k) {
+            const nlohmann::json& frame = frames[k];
+            const double ms = frame.value("frame_ms", 0.0);
+            total_ms += ms;
+            worst_ms = std::max(worst_ms, ms);
+            if (k > 0) {
+                after_first_ms += ms;
+                ++after_first;
+            }
+            for (const char* part : parts) part_totals[part] += frame.value(part, 0.0);
+            numbers.push_back(frame.value("frame", std::size_t(0)));
+        }
     std::sort(numbers.begin(), numbers.end());
-    const double n = double(numbers.size());
-    const double mean_ms = n > 0 ? total_ms / n : 0.0;
-    nlohmann::json j = {{"frames", numbers.size()},
-                        {"mean_frame_ms", mean_ms},
-                        {"worst_frame_ms", worst_ms},
-                        {"mean_build_ms", n > 0 ? build_ms / n : 0.0},
-                        {"mean_trace_ms", n > 0 ? trace_ms / n : 0.0},
-                        {"frames_per_second", mean_ms > 0 ? 1000.0 / mean_ms : 0.0},
-                        {"frame_numbers", numbers}};
+    auto mean = [](double total, std::size_t count) { return count > 0 ? total / count : 0.0; };
+    auto per_second = [](double mean_ms) { return mean_ms > 0 ? 1000.0 / mean_ms : 0.0; };
+    const double mean_ms = mean(total_ms, numbers.size());
+    nlohmann::json j = {
+        {"frames", numbers.size()}, {"mean_frame_ms", mean_ms}, {"worst_frame_ms", worst_ms}};
+    for (const char* part : parts)
+        j["mean_" + std::string(part)] = mean(part_totals[part], numbers.size());
+    j["frames_per_second"] = per_second(mean_ms);
+    j["frames_per_second_after_first"] = per_second(mean(after_first_ms, after_first));
+    j["frame_numbers"] = numbers;
     if (std::adjacent_find(numbers.begin(), numbers.end()) != numbers.end())
         j["warning"] = "some frame numbers appear in more than one folder";
     return j;
+}
+
+nlohmann::json summarise_frames(const nlohmann::json& frames) {
+    return summarise_runs({frames});
 }
 
 std::string json_text(const nlohmann::json& json) {

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -16,9 +17,13 @@ namespace kdray {
 nlohmann::json scene_json(const Scene& scene);
 /// Tree statistics (SAH cost with the tree's own C_t and C_i), build parameters and timings.
 nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count);
-/// Summary of an array of frame records (stats.json's "frames", or the frames of several
-/// folders, the shards of one animation): frames, mean and worst frame_ms, mean build_ms and
-/// trace_ms, frames per second, the frame numbers sorted, and a warning when one appears twice.
+/// Summary of the frame records of one run (stats.json's "frames") or of several (the folders
+/// of an animation's shards), each in the order it rendered them: frames, mean and worst
+/// frame_ms, the mean of each part of a frame (load wait, compile, build, trace, write), frames
+/// per second (1000 / mean frame_ms) over every frame and over all but each run's first (the one
+/// that built the programs; 0 when no frame is left), the frame numbers sorted, and a warning when
+/// one appears twice.
+nlohmann::json summarise_runs(const std::vector<nlohmann::json>& runs);
 nlohmann::json summarise_frames(const nlohmann::json& frames);
 
 /// `json` as kdray prints and writes it (indented by 2). Text that is not UTF-8 (a file name of

@@ -1,7 +1,7 @@
 // tracer.h — the tracer interface every frame goes through: prepare(inputs) once per effects
-// combination, outside any timing (programs, kernels, first launches), then trace(built tree,
-// scene, inputs) per frame. The CPU reference is core/reference_tracer.h, the OpenCL tracer
-// cl/render/opencl_tracer.h; cl/backends.h picks one.
+// combination, outside trace_ms (programs, kernels, first launches: a frame's compile_ms and
+// other_ms), then trace(built tree, scene, inputs) per frame. The CPU reference is
+// core/reference_tracer.h, the OpenCL tracer cl/render/opencl_tracer.h; cl/backends.h picks one.
 #pragma once
 
 #include <string>

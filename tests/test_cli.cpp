@@ -54,6 +54,45 @@ nlohmann::json read_json(const fs::path& path) {
     return nlohmann::json::parse(in);
 }
 
+/// The parts of every frame's time in `stats` add up to its frame_ms (the remainder, other_ms,
+/// small), none negative; and the summary's rates are those of the frames' own frame_ms:
+/// frames_per_second_after_first over frames 2..n only.
+void check_frame_times(const nlohmann::json& stats) {
+    const nlohmann::json& frames = stats["frames"];
+    REQUIRE(frames.size() >= 2);
+    double total_ms = 0, after_first_ms = 0, compile_ms = 0, write_ms = 0;
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+        const nlohmann::json& f = frames[k];
+        INFO("frame record " << k << ": " << f.dump());
+        for (const char* key : {"load_ms", "load_wait_ms", "compile_ms", "build_ms", "trace_ms",
+                                "write_ms", "frame_ms"}) {
+            REQUIRE_MESSAGE(f.contains(key), key);
+            CHECK_MESSAGE(f[key].get<double>() >= 0.0, key);
+        }
+        const double named = f["load_wait_ms"].get<double>() + f["compile_ms"].get<double>() +
+                             f["build_ms"].get<double>() + f["trace_ms"].get<double>() +
+                             f["write_ms"].get<double>();
+        const double frame_ms = f["frame_ms"].get<double>();
+        // The named parts are separate stretches of the frame: they cannot exceed it, and what
+        // they leave (render inputs, kernels made on first use) is a few milliseconds.
+        CHECK(named <= frame_ms + 1e-6);
+        CHECK(frame_ms - named <= 5.0 + 0.1 * frame_ms);
+        CHECK(f["other_ms"].get<double>() == doctest::Approx(frame_ms - named).epsilon(1e-6));
+        CHECK(f["write_ms"].get<double>() > 0.0);  // a PNG written
+        total_ms += frame_ms;
+        if (k > 0) after_first_ms += frame_ms;
+        compile_ms += f["compile_ms"].get<double>();
+        write_ms += f["write_ms"].get<double>();
+    }
+    const double n = double(frames.size());
+    const nlohmann::json& s = stats["summary"];
+    CHECK(s["frames_per_second"].get<double>() == doctest::Approx(1000.0 * n / total_ms));
+    CHECK(s["frames_per_second_after_first"].get<double>() ==
+          doctest::Approx(1000.0 * (n - 1) / after_first_ms));
+    CHECK(s["mean_compile_ms"].get<double>() == doctest::Approx(compile_ms / n));
+    CHECK(s["mean_write_ms"].get<double>() == doctest::Approx(write_ms / n));
+}
+
 const char* kSmallRender = R"({
   "image": {"width": 48, "height": 32},
   "camera": {"position": [0.5, 0.5, 3], "look_at": [0.5, 0.5, 0.5], "up": [0, 1, 0], "fov_y": 50},
@@ -79,6 +118,10 @@ TEST_CASE("kdray build --json reports the tree the reference builder makes in-pr
     nlohmann::json j = nlohmann::json::parse(r.out);
     for (const char* key : {"nodes", "leaves", "sah_cost", "build_ms", "timings_ms", "max_depth"})
         CHECK_MESSAGE(j.contains(key), key);
+    // Beside the build: the load, and a preparation that builds no program (the reference).
+    CHECK(j["load_ms"].get<double>() > 0.0);
+    CHECK(j["prepare_ms"].get<double>() >= 0.0);
+    CHECK(j["compile_ms"] == 0.0);
 
     KdTree expected = build_reference(load_obj(obj));
     CHECK(j["nodes"].get<std::size_t>() == expected.nodes.size());
@@ -245,6 +288,9 @@ TEST_CASE("kdray render writes images, AOVs that agree with brute force, and sta
     CHECK(fs::path(stats["frames"][0]["input"].get<std::string>()).filename() == "frame_2.obj");
     CHECK(stats["frames"][0]["rays"]["primary"].get<std::size_t>() == 48 * 32);
     CHECK(stats["summary"]["frames"].get<int>() == 2);
+    check_frame_times(stats);
+    // The reference builder and tracer compile nothing.
+    for (const auto& frame : stats["frames"]) CHECK(frame["compile_ms"] == 0.0);
 
     // Every pixel's hit equals brute force along the camera ray of conventions.md.
     HitBuffer aov = read_aov(out / "frame_2.aov.exr");
@@ -301,10 +347,13 @@ TEST_CASE("kdray render --frames and --shard pick frames by their number in the 
 TEST_CASE("kdray render --warm-up renders the first frame through the run's pipeline, unwritten") {
     // The warm-up is the run's own render_frame with nothing written: the files and the frames
     // of stats.json are those of a run without it, and a bad first frame fails the warm-up with
-    // the frame's own error, before anything is written.
+    // the frame's own error, before anything is written. Both runs are fresh processes on the
+    // OpenCL backends: without the warm-up the first frame builds every program (compile_ms) and
+    // the later ones none; with it, no frame of the run builds one.
     fs::path dir = fresh_temp_dir("cli-warm-up");
     write_obj(dir / "in" / "f_0.obj", random_triangles(60, 15));
     write_obj(dir / "in" / "f_1.obj", random_triangles(60, 16));
+    write_obj(dir / "in" / "f_2.obj", random_triangles(60, 17));
     fs::path render = write_text_file(dir / "render.json", kSmallRender);
     auto run = [&](const fs::path& out, const std::string& frames, bool warm_up) {
         std::vector<std::string> args = {"render",   frames,          "-o", out.string(),
@@ -317,15 +366,28 @@ TEST_CASE("kdray render --warm-up renders the first frame through the run's pipe
     REQUIRE_MESSAGE(cold.status == 0, cold.err);
     CommandResult warm = run(dir / "warm", frames, true);
     REQUIRE_MESSAGE(warm.status == 0, warm.err);
-    for (const char* image : {"f_0.png", "f_1.png"})
+    for (const char* image : {"f_0.png", "f_1.png", "f_2.png"})
         CHECK(read_file(dir / "warm" / image) == read_file(dir / "cold" / image));
     std::size_t files = 0;
     for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir / "warm")) ++files;
-    CHECK(files == 3);  // two images and stats.json
+    CHECK(files == 4);  // three images and stats.json
     const nlohmann::json stats = read_json(dir / "warm" / "stats.json");
-    REQUIRE(stats["frames"].size() == 2);
+    REQUIRE(stats["frames"].size() == 3);
     CHECK(stats["frames"][0]["frame"] == 0);
-    CHECK(stats["summary"]["frame_numbers"] == nlohmann::json::array({0, 1}));
+    CHECK(stats["summary"]["frame_numbers"] == nlohmann::json::array({0, 1, 2}));
+    check_frame_times(stats);
+    CHECK(stats["warm_up_ms"].get<double>() > 0.0);
+    for (const auto& frame : stats["frames"]) CHECK(frame["compile_ms"] == 0.0);
+    // The warm-up's scene is the first frame's: it waited for no load.
+    CHECK(stats["frames"][0]["load_wait_ms"].get<double>() < 1.0);
+
+    const nlohmann::json cold_stats = read_json(dir / "cold" / "stats.json");
+    REQUIRE(cold_stats["frames"].size() == 3);
+    check_frame_times(cold_stats);
+    CHECK(cold_stats["frames"][0]["compile_ms"].get<double>() > 0.0);
+    CHECK(cold_stats["frames"][1]["compile_ms"] == 0.0);
+    CHECK(cold_stats["frames"][2]["compile_ms"] == 0.0);
+    CHECK(cold_stats["summary"]["mean_compile_ms"].get<double>() > 0.0);
 
     write_text_file(dir / "bad" / "f_0.obj", "v 0 0 0\nv 1 0 0\nv 0 1 inf\nf 1 2 3\n");
     CommandResult bad = run(dir / "bad-out", (dir / "bad" / "f_0.obj").string(), true);

@@ -146,20 +146,50 @@ TEST_CASE("frame pipeline: the warm-up's frame is the run's frame, unwritten") {
 }
 
 TEST_CASE("frame pipeline: one summary for a run and for folders") {
-    const nlohmann::json frames = nlohmann::json::array(
-        {{{"frame", 4}, {"frame_ms", 30.0}, {"build_ms", 10.0}, {"trace_ms", 15.0}},
-         {{"frame", 2}, {"frame_ms", 10.0}, {"build_ms", 4.0}, {"trace_ms", 5.0}}});
+    // Records in the order the run rendered them: frame 4 first (the one that compiled).
+    const nlohmann::json frames = nlohmann::json::array({{{"frame", 4},
+                                                          {"frame_ms", 30.0},
+                                                          {"load_wait_ms", 2.0},
+                                                          {"compile_ms", 12.0},
+                                                          {"build_ms", 10.0},
+                                                          {"trace_ms", 5.0},
+                                                          {"write_ms", 1.0}},
+                                                         {{"frame", 2},
+                                                          {"frame_ms", 10.0},
+                                                          {"load_wait_ms", 0.0},
+                                                          {"compile_ms", 0.0},
+                                                          {"build_ms", 4.0},
+                                                          {"trace_ms", 3.0},
+                                                          {"write_ms", 2.0}}});
     const nlohmann::json s = summarise_frames(frames);
     CHECK(s["frames"] == 2);
     CHECK(s["mean_frame_ms"].get<double>() == doctest::Approx(20.0));
     CHECK(s["worst_frame_ms"].get<double>() == doctest::Approx(30.0));
+    CHECK(s["mean_load_wait_ms"].get<double>() == doctest::Approx(1.0));
+    CHECK(s["mean_compile_ms"].get<double>() == doctest::Approx(6.0));
     CHECK(s["mean_build_ms"].get<double>() == doctest::Approx(7.0));
-    CHECK(s["mean_trace_ms"].get<double>() == doctest::Approx(10.0));
-    CHECK(s["frames_per_second"].get<double>() == doctest::Approx(50.0));
+    CHECK(s["mean_trace_ms"].get<double>() == doctest::Approx(4.0));
+    CHECK(s["mean_write_ms"].get<double>() == doctest::Approx(1.5));
+    CHECK(s["frames_per_second"].get<double>() == doctest::Approx(1000.0 / 20.0));
+    CHECK(s["frames_per_second_after_first"].get<double>() == doctest::Approx(1000.0 / 10.0));
     CHECK(s["frame_numbers"] == nlohmann::json::array({2, 4}));
     CHECK_FALSE(s.contains("warning"));
     nlohmann::json twice = frames;
     twice.push_back(frames[0]);
     CHECK(summarise_frames(twice).contains("warning"));
-    CHECK(summarise_frames(nlohmann::json::array())["frames_per_second"] == 0.0);
+    const nlohmann::json none = summarise_frames(nlohmann::json::array());
+    CHECK(none["frames_per_second"] == 0.0);
+    CHECK(none["frames_per_second_after_first"] == 0.0);
+    CHECK(summarise_frames(nlohmann::json::array({frames[0]}))["frames_per_second_after_first"] ==
+          0.0);
+
+    // Two shards: each has a first frame of its own. After the firsts: 10 and 60 ms.
+    const nlohmann::json shard = nlohmann::json::array(
+        {{{"frame", 1}, {"frame_ms", 20.0}}, {{"frame", 3}, {"frame_ms", 60.0}}});
+    const nlohmann::json both = summarise_runs({frames, shard});
+    CHECK(both["frames"] == 4);
+    CHECK(both["frames_per_second"].get<double>() == doctest::Approx(1000.0 / 30.0));
+    CHECK(both["frames_per_second_after_first"].get<double>() == doctest::Approx(1000.0 / 35.0));
+    CHECK(both["mean_compile_ms"].get<double>() == doctest::Approx(3.0));  // absent: 0
+    CHECK(both["frame_numbers"] == nlohmann::json::array({1, 2, 3, 4}));
 }

@@ -49,10 +49,11 @@ struct BuildContext {
     BuilderKernels& kernels;
     BuildParams params;
 
-    /// A counted array of `count` elements of T (sized by the shared struct, not by hand).
+    /// A counted array of `count` elements of T (sized by the shared struct, not by hand); a new
+    /// buffer has room for `room` elements if that is more (DeviceMemory::allocate).
     template <class T>
-    DeviceArray allocate(std::size_t count, const std::string& what) {
-        return memory.allocate(count * sizeof(T), what);
+    DeviceArray allocate(std::size_t count, const std::string& what, std::size_t room = 0) {
+        return memory.allocate(count * sizeof(T), what, room * sizeof(T));
     }
     /// Makes `array` hold `count` elements of T, keeping its first `used`.
     template <class T>

@@ -9,6 +9,13 @@
 
 namespace kdray::build_detail {
 
+/// What a level's split writes per reference and the next level no longer reads (each
+/// reference's sides, its boxes clipped to the children): one set for the whole stage, replaced
+/// only when a level outgrows it.
+struct LargeScratch {
+    DeviceArray ref_sides, child_box;
+};
+
 /// The active large nodes of one level (KdLargeNode each) and their references. Node i's
 /// references are ref_start[i] .. + ref_count[i], in reduction chunks chunk_start[i] ..
 /// chunk_start[i + 1] (nodes + 1 entries, the last the total): the segments of primitives.cl's
@@ -28,7 +35,7 @@ struct LargeLevel {
     /// references to `small` and the leaves' references to the leaf store, and returns the
     /// next level: the children that stay large. `force_leaf`: every node becomes a leaf.
     LargeLevel next(BuildContext& ctx, const TriangleBounds& triangles, bool force_leaf,
-                    BuildOutput& output, SmallRoots& small) const;
+                    BuildOutput& output, SmallRoots& small, LargeScratch& scratch) const;
 };
 
 /// Large-node stage (§4.1): levels until no large node is left; a scene of at most T triangles

@@ -1,6 +1,7 @@
 #include "cl/render/opencl_renderer.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <string>
 
@@ -183,7 +184,9 @@ OpenClRenderPlan plan_opencl_render(ClDevice& device, const OpenClRenderChoice& 
 
 void warm_up_opencl_render(ClDevice& device, OpenClRenderPlan& plan) {
     // One tile over an image of width 0: every work-item returns at once, but the device
-    // compiles each kernel for the tile size it will run with.
+    // compiles each kernel for the tile size it will run with (PoCL: seconds with a cold cache),
+    // so its time is compilation.
+    const auto start = std::chrono::steady_clock::now();
     const KdView view{};
     with_cl_context("preparing the render kernel on " + device.info().name, [&] {
         const cl::Buffer dummy = device.allocate(sizeof(KdHit), "render kernel warm-up buffer");
@@ -192,6 +195,9 @@ void warm_up_opencl_render(ClDevice& device, OpenClRenderPlan& plan) {
         launch_rows(device, plan, buffers, view, {0, 1}, 0);
         device.queue().finish();
     });
+    add_compile_ms(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count());
 }
 
 FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree& tree,

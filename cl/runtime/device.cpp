@@ -174,6 +174,7 @@ cl::Buffer ClDevice::allocate(std::size_t bytes, const std::string& what) const 
     cl_int status = CL_SUCCESS;
     cl_mem mem = clCreateBuffer(context_(), CL_MEM_READ_WRITE, size, nullptr, &status);
     if (status != CL_SUCCESS) throw_cl_allocation_error(what, size, status);
+    allocated_bytes_ += size;
     return cl::Buffer(mem);  // takes ownership of the one reference clCreateBuffer returned
 }
 

@@ -53,6 +53,9 @@ class ClDevice {
     /// A device buffer of `bytes` (at least 1, since OpenCL forbids empty buffers). Throws Error
     /// naming `what` and the size when it exceeds CL_DEVICE_MAX_MEM_ALLOC_SIZE or fails.
     cl::Buffer allocate(std::size_t bytes, const std::string& what) const;
+    /// The bytes of every buffer allocate() has made: what reuse (DeviceMemory, BufferPool)
+    /// saved shows as bytes not allocated (tests).
+    std::uint64_t allocated_bytes() const { return allocated_bytes_; }
 
     /// Buffers kept for the next build: at most an eighth of the device's memory, and 1 GiB.
     BufferPool& buffer_pool() { return buffer_pool_; }
@@ -63,6 +66,7 @@ class ClDevice {
     cl::CommandQueue queue_;
     ClDeviceInfo info_;
     BufferPool buffer_pool_;
+    mutable std::uint64_t allocated_bytes_ = 0;
 };
 
 /// The devices on one line, for error messages: "0: NAME (VENDOR, TYPE, VERSION); 1: ...".

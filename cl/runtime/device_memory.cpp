@@ -32,7 +32,7 @@ void DeviceArray::release() {
     owner_ = nullptr;
 }
 
-DeviceArray DeviceMemory::allocate(std::size_t bytes, const std::string& what) {
+DeviceArray DeviceMemory::allocate(std::size_t bytes, const std::string& what, std::size_t room) {
     bytes = std::max<std::size_t>(bytes, 1);
     DeviceArray array;
     array.owner_ = this;
@@ -48,8 +48,8 @@ DeviceArray DeviceMemory::allocate(std::size_t bytes, const std::string& what) {
     array.buffer_ = device_.buffer_pool().take(bytes, limit, &taken_bytes);
     array.bytes_ = taken_bytes;
     if (!array.buffer_()) {
-        array.buffer_ = device_.allocate(bytes, what);
-        array.bytes_ = bytes;
+        array.bytes_ = std::max(bytes, room);
+        array.buffer_ = device_.allocate(array.bytes_, what);
     }
     current_ += array.bytes_;
     peak_ = std::max(peak_, current_);

@@ -63,8 +63,9 @@ class DeviceMemory {
     DeviceMemory& operator=(const DeviceMemory&) = delete;
 
     /// A buffer of at least `bytes` (at least one byte; a recycled buffer may be up to twice as
-    /// large); `what` names it in errors.
-    DeviceArray allocate(std::size_t bytes, const std::string& what);
+    /// large); `what` names it in errors. A new buffer, when no kept one fits, has `room` bytes
+    /// if that is more: room for the slightly larger requests that follow (growing arrays).
+    DeviceArray allocate(std::size_t bytes, const std::string& what, std::size_t room = 0);
 
     /// Makes `array` hold at least `bytes`, keeping its first `used` bytes: grows to the larger of
     /// `bytes` and twice its size, so that appending level by level copies O(total) bytes.

@@ -1,6 +1,7 @@
 // program_cache.cpp — the process-wide cache of built OpenCL programs.
 #include "cl/runtime/program_cache.h"
 
+#include <chrono>
 #include <map>
 #include <mutex>
 #include <tuple>
@@ -17,6 +18,9 @@ using ProgramKey = std::tuple<cl_context, cl_device_id, std::string, std::string
 std::mutex cache_mutex;
 std::map<ProgramKey, cl::Program> cache;
 int builds = 0;
+// compile_ms_total: its own lock, since cached_program holds cache_mutex while it builds.
+std::mutex compile_mutex;
+double compile_ms = 0;
 
 }  // namespace
 
@@ -29,10 +33,14 @@ cl::Program cached_program(const ClDevice& device, std::string_view file,
 
     const std::string what = "building OpenCL program " + std::string(file);
     const std::string_view source = embedded_kernel_source(file);
+    const auto start = std::chrono::steady_clock::now();
     cl::Program program =
         with_cl_context(what, [&] { return cl::Program(device.context(), std::string(source)); });
     const cl_device_id id = device.device()();
     const cl_int status = clBuildProgram(program(), 1, &id, options.c_str(), nullptr, nullptr);
+    add_compile_ms(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count());
     if (status != CL_SUCCESS) {
         std::string log;
         try {
@@ -72,6 +80,16 @@ std::shared_ptr<void> detail::cached_object(const ClDevice& device, const std::s
 int program_build_count() {
     std::lock_guard<std::mutex> lock(cache_mutex);
     return builds;
+}
+
+double compile_ms_total() {
+    std::lock_guard<std::mutex> lock(compile_mutex);
+    return compile_ms;
+}
+
+void add_compile_ms(double ms) {
+    std::lock_guard<std::mutex> lock(compile_mutex);
+    compile_ms += ms;
 }
 
 }  // namespace kdray

@@ -28,6 +28,13 @@ cl::Kernel make_kernel(const cl::Program& program, const char* name);
 
 /// How many programs the cache has built in this process (tests check that nothing is rebuilt).
 int program_build_count();
+/// Milliseconds this process has spent compiling (what a frame's compile_ms is the growth of):
+/// building programs here (from source, clBuildProgram, failed builds included), and what
+/// add_compile_ms adds.
+double compile_ms_total();
+/// Counts `ms` of compilation done outside cached_program: a first launch that only makes the
+/// device compile a kernel for its work-group size (PoCL compiles there, not in clBuildProgram).
+void add_compile_ms(double ms);
 
 namespace detail {
 std::shared_ptr<void> cached_object(const ClDevice& device, const std::string& key,
