@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Build benchmark: the OpenCL builder, the CPU reference builder and Embree (medium and high
-quality BVH builds), side by side in one run, for every testdata and shared scene.
+"""Build benchmark: the OpenCL builder at each build quality, the CPU reference builder and Embree
+(low, medium and high quality BVH builds), side by side in one run, for every testdata and shared
+scene. The OpenCL columns without a level are `kdray build`'s default, high.
 
 For each scene and builder: a warm-up build, then the median of --repeat builds (kdray's
 `build --repeat`, the peer's `--repeat`), with SAH cost (C_t = 15, C_i = 20) and node counts.
@@ -165,6 +166,11 @@ def main():
         row.update(triangles=ocl["triangles"], opencl_ms=ocl["build_ms"],
                    opencl_sah=ocl["sah_cost"], opencl_nodes=ocl["nodes"],
                    opencl_bytes_per_tri=ocl.get("device_bytes_per_triangle"))
+        for quality in ("low", "medium"):
+            level = run_json([args.kdray, "build", obj, "--json", "--builder", "opencl",
+                              "--quality", quality, "--repeat", str(args.repeat)])
+            row[f"opencl_{quality}_ms"] = level["build_ms"]
+            row[f"opencl_{quality}_sah"] = level["sah_cost"]
         if args.cold > 0:
             cold = [cold_build(args.kdray, obj) for _ in range(args.cold)]
             row.update(opencl_cold_ms=median([r["build_ms"] for r in cold]),
@@ -175,7 +181,7 @@ def main():
             row.update(reference_ms=ref["build_ms"], reference_sah=ref["sah_cost"],
                        reference_nodes=ref["nodes"])
         if peer:
-            for quality in ("medium", "high"):
+            for quality in ("low", "medium", "high"):
                 emb = run_json([peer, obj, "--camera", camera, "--quality", quality,
                                 "--repeat", str(args.repeat + 1), "--threads", str(os.cpu_count())])
                 row[f"embree_{quality}_ms"] = emb["build_ms"]
@@ -204,6 +210,24 @@ def main():
         "| SAH OpenCL / reference | nodes OpenCL | device bytes / tri |",
         "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
+    level_lines = [
+        "", "## Build qualities", "",
+        "kdray's `--quality` levels (high is the table above's OpenCL column) beside Embree's.",
+        "",
+        "| scene | OpenCL low ms | medium ms | high ms | Embree low ms | medium ms | high ms "
+        "| low / Embree medium | SAH low / reference | SAH medium / reference "
+        "| SAH high / reference |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in rows:
+        level_lines.append(
+            f"| {r['scene']} | {fmt(r.get('opencl_low_ms'))} | {fmt(r.get('opencl_medium_ms'))} | "
+            f"{fmt(r['opencl_ms'])} | {fmt(r.get('embree_low_ms'))} | "
+            f"{fmt(r.get('embree_medium_ms'))} | {fmt(r.get('embree_high_ms'))} | "
+            f"{ratio(r.get('opencl_low_ms'), r.get('embree_medium_ms'))} | "
+            f"{ratio(r.get('opencl_low_sah'), r.get('reference_sah'))} | "
+            f"{ratio(r.get('opencl_medium_sah'), r.get('reference_sah'))} | "
+            f"{ratio(r['opencl_sah'], r.get('reference_sah'))} |")
     for r in rows:
         lines.append(
             f"| {r['scene']} | {r['triangles']} | {fmt(r['opencl_ms'])} | "
@@ -213,7 +237,7 @@ def main():
             f"{ratio(r.get('reference_ms'), r['opencl_ms'])} | {fmt(r['opencl_sah'])} | "
             f"{fmt(r.get('reference_sah'))} | {ratio(r['opencl_sah'], r.get('reference_sah'))} | "
             f"{r['opencl_nodes']} | {fmt(r.get('opencl_bytes_per_tri'), 0)} |")
-    write_report(args.out, lines, rows)
+    write_report(args.out, lines + level_lines, rows)
     return 0
 
 
