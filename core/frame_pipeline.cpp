@@ -45,7 +45,7 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
     const std::filesystem::path image_path = options_.out_dir / (stem + "." + options_.format);
     const std::filesystem::path aov_path = options_.out_dir / (stem + ".aov.exr");
     if (output == Output::Write) {
-        write_image(image_path, result.image);
+        write_image(image_path, result.image, settings_.exposure);
         try {
             if (options_.aov) write_aov(aov_path, result.hits);
         } catch (const Error&) {

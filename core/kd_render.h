@@ -3,13 +3,13 @@
  * between CPU and GPU. The reference image is therefore the oracle for the OpenCL image: the same
  * samples, the same rays, the same arithmetic.
  *
- * Shading is Whitted-style: emission, Lambert diffuse and a Blinn-Phong highlight under point and
- * directional lights with shadow rays, ideal mirror reflection, and dielectric reflection and
- * refraction weighted by the Fresnel equations, up to the render file's max_depth; smooth where
- * the scene has vertex normals (kd_shading_normal). Which of shadows, reflection and refraction
- * exist at all is decided per frame from its materials and lights: in a kernel by
- * -DKDRAY_COMPILED_EFFECTS (code a scene does not call for is not even compiled), on the host by
- * KdView.effects.
+ * Shading is Whitted-style: emission, ambient light by Ka, Lambert diffuse and a Blinn-Phong
+ * highlight under point and directional lights with shadow rays, ideal mirror reflection, and
+ * dielectric reflection and refraction weighted by the Fresnel equations, up to the render file's
+ * max_depth; smooth where the scene has vertex normals (kd_shading_normal). Which of shadows,
+ * reflection, refraction and ambient light exist at all is decided per frame from its materials and
+ * lights: in a kernel by -DKDRAY_COMPILED_EFFECTS (code a scene does not call for is not even
+ * compiled), on the host by KdView.effects.
  */
 #ifndef KDRAY_KD_RENDER_H
 #define KDRAY_KD_RENDER_H
@@ -304,8 +304,9 @@ KDRAY_HOT_INLINE KdRay kd_shadow_ray(const KdView* view, const kd_f32* p, const 
 }
 
 /* Direct light at p (geometric normal ng, facing the viewer; shading normal ns) for the eye
- * direction `dir`: diffuse and highlight by ns under every light, each behind a shadow ray that
- * leaves from ng's side; with shadows off, under the headlight.
+ * direction `dir`: the ambient light it reflects (with KDRAY_EFFECT_AMBIENT), and diffuse and
+ * highlight by ns under every light, each behind a shadow ray that leaves from ng's side; with
+ * shadows off, under the headlight.
  * occluded, when not 0, says which of the shadow rays from p are blocked (bit i for light i, as
  * kd_trace_shadow_packets traced them); else each shadow ray is traced here. */
 KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
@@ -313,6 +314,9 @@ KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* vi
                                       const kd_f32* ng, const kd_f32* ns, const kd_f32* dir,
                                       KDRAY_GLOBAL const kd_u32* occluded, kd_f32* out,
                                       KdRayCounts* rays) {
+    /* Ambient light, reflected by Ka (the material's ambient holds Ka x the render file's). */
+    if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AMBIENT))
+        for (int c = 0; c < 3; ++c) out[c] += m->ambient[c];
     const kd_u32 light_count = kd_shining_lights(view);
     const kd_u32 lights = light_count == 0u ? 1u : light_count;
     for (kd_u32 i = 0; i < lights; ++i) {

@@ -138,6 +138,7 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_EFFECT_SHADOWS 1u
 #define KDRAY_EFFECT_REFLECTION 2u
 #define KDRAY_EFFECT_REFRACTION 4u
+#define KDRAY_EFFECT_AMBIENT 8u /* Ka x the render file's ambient light */
 
 /* What kd_render_pixels reads and writes besides the image and the centre hits (its `outputs`
  * argument): the primary rays' hits come traced already (by kd_trace_camera_packets), so do the
@@ -161,13 +162,15 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_MATERIAL_DIELECTRIC 2u /* Fresnel reflection + refraction, see transmit_fraction */
 #define KDRAY_MATERIAL_HIGHLIGHT 4u  /* Blinn-Phong highlight from specular and shininess */
 
-/* KdMaterial — 64 bytes.
+/* KdMaterial — 80 bytes.
  *   diffuse[3]   Kd                      shininess  Ns (Blinn-Phong exponent)
  *   specular[3]  Ks                      ior        Ni (1 when absent or not above 0)
  *   emission[3]  Ke                      transmit_fraction  share of light that meets the
  *                                        dielectric (1 for illum 4/6/7, 1 - d for d < 1, ...)
  *   filter[3]    colour of transmitted light (Tf where it means transmission, else 1)
- *   flags        KDRAY_MATERIAL_* bits */
+ *   flags        KDRAY_MATERIAL_* bits
+ *   ambient[3]   the ambient radiance it reflects: Ka x the render file's ambient (per frame)
+ *   pad          0 */
 typedef struct KdMaterial {
     kd_f32 diffuse[3];
     kd_f32 shininess;
@@ -177,6 +180,8 @@ typedef struct KdMaterial {
     kd_f32 transmit_fraction;
     kd_f32 filter[3];
     kd_u32 flags;
+    kd_f32 ambient[3];
+    kd_u32 pad;
 } KdMaterial;
 
 #define KDRAY_LIGHT_POINT 0u
@@ -227,7 +232,7 @@ typedef struct KdRayCounts {
 } KdRayCounts;
 
 #ifndef KDRAY_DEVICE_CODE
-static_assert(sizeof(KdMaterial) == 64, "KdMaterial is 64 bytes on every device");
+static_assert(sizeof(KdMaterial) == 80, "KdMaterial is 80 bytes on every device");
 static_assert(sizeof(KdLight) == 32, "KdLight is 32 bytes on every device");
 static_assert(sizeof(KdView) == 112, "KdView is 112 bytes on every device");
 static_assert(sizeof(KdRayCounts) == 16, "KdRayCounts is 16 bytes on every device");

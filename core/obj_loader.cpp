@@ -139,6 +139,7 @@ void set_vertex_normals(Scene& scene, const std::vector<int>& corner_normal,
 Material to_material(const tinyobj::material_t& m) {
     Material out;
     out.name = m.name;
+    out.ambient = vec3(m.ambient);
     out.diffuse = vec3(m.diffuse);
     out.specular = vec3(m.specular);
     out.shininess = static_cast<float>(m.shininess);

@@ -10,17 +10,19 @@ namespace kdray {
 
 kd_u32 Effects::bits() const {
     return (shadows ? KDRAY_EFFECT_SHADOWS : 0u) | (reflection ? KDRAY_EFFECT_REFLECTION : 0u) |
-           (refraction ? KDRAY_EFFECT_REFRACTION : 0u);
+           (refraction ? KDRAY_EFFECT_REFRACTION : 0u) | (ambient ? KDRAY_EFFECT_AMBIENT : 0u);
 }
 
 nlohmann::json Effects::to_json() const {
     return {{"shadows", shadows},
             {"reflection", reflection},
             {"refraction", refraction},
+            {"ambient", ambient},
             {"reasons",
              {{"shadows", shadows_reason},
               {"reflection", reflection_reason},
-              {"refraction", refraction_reason}}}};
+              {"refraction", refraction_reason},
+              {"ambient", ambient_reason}}}};
 }
 
 Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
@@ -28,10 +30,21 @@ Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
     std::set<kd_u32> used(scene.material_ids.begin(), scene.material_ids.end());
     const Material* mirror = nullptr;
     const Material* glass = nullptr;
+    const Material* ambient = nullptr;
     for (kd_u32 id : used) {
         const Material& m = scene.materials.at(id);
         if (!mirror && m.is_mirror()) mirror = &m;
         if (!glass && m.transmits()) glass = &m;
+        if (!ambient && m.reflects_ambient()) ambient = &m;
+    }
+    const Vec3& light = settings.ambient;
+    if (!(light.x > 0 || light.y > 0 || light.z > 0)) {
+        e.ambient_reason = "the render file has no ambient light";
+    } else if (!ambient) {
+        e.ambient_reason = "no material reflects ambient light (Ka 0)";
+    } else {
+        e.ambient = true;
+        e.ambient_reason = "ambient light and material '" + ambient->name + "' has Ka > 0";
     }
     if (settings.lights.empty()) {
         e.shadows_reason = "the render file has no lights (a headlight casts no visible shadow)";
@@ -61,10 +74,11 @@ Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
     return e;
 }
 
-KdMaterial to_device_material(const Material& m) {
+KdMaterial to_device_material(const Material& m, const Vec3& ambient) {
     KdMaterial d{};
     Vec3 filter = m.transmission_filter();
     for (int c = 0; c < 3; ++c) {
+        d.ambient[c] = m.ambient[c] * ambient[c];
         d.diffuse[c] = m.diffuse[c];
         d.specular[c] = m.specular[c];
         d.emission[c] = m.emission[c];
@@ -116,7 +130,8 @@ RenderInputs prepare_render(const Scene& scene, const RenderSettings& settings,
     RenderInputs in;
     in.effects = decide_effects(scene, settings);
     in.view = make_view(camera, settings, scene, in.effects, seed);
-    for (const Material& m : scene.materials) in.materials.push_back(to_device_material(m));
+    for (const Material& m : scene.materials)
+        in.materials.push_back(to_device_material(m, settings.ambient));
     for (const Light& l : settings.lights) in.lights.push_back(to_device_light(l));
     if (in.lights.empty()) in.lights.push_back(KdLight{});  // never a zero-size device buffer
     return in;

@@ -1,7 +1,8 @@
 // render_setup.h — turns a frame's scene, render file and camera into what the shared shading of
 // kd_render.h reads (KdView, KdMaterial, KdLight), and decides which effects the frame calls for:
 // shadow rays only with lights, reflection only when a material reflects, refraction only when
-// one transmits. The decision and its reasons go to stats.json.
+// one transmits, ambient light only when the render file has some and a material reflects it
+// (Ka > 0). The decision and its reasons go to stats.json.
 #pragma once
 
 #include <string>
@@ -17,8 +18,8 @@
 namespace kdray {
 
 struct Effects {
-    bool shadows = false, reflection = false, refraction = false;
-    std::string shadows_reason, reflection_reason, refraction_reason;
+    bool shadows = false, reflection = false, refraction = false, ambient = false;
+    std::string shadows_reason, reflection_reason, refraction_reason, ambient_reason;
 
     kd_u32 bits() const;
     nlohmann::json to_json() const;
@@ -27,7 +28,8 @@ struct Effects {
 /// Looks only at the materials some triangle uses, and at the render file's lights and depth.
 Effects decide_effects(const Scene& scene, const RenderSettings& settings);
 
-KdMaterial to_device_material(const Material& material);
+/// `ambient`: the render file's ambient light, which the material reflects by its Ka.
+KdMaterial to_device_material(const Material& material, const Vec3& ambient);
 KdLight to_device_light(const Light& light);
 /// Camera basis exactly as conventions.md (and the Embree peer) computes it.
 KdView make_view(const Camera& camera, const RenderSettings& settings, const Scene& scene,

@@ -13,9 +13,10 @@
 
 namespace kdray {
 
-/// The MTL fields kdray uses (Kd, Ks, Ns, Ni, d/Tr, Tf, Ke, illum), with MTL's defaults.
+/// The MTL fields kdray uses (Ka, Kd, Ks, Ns, Ni, d/Tr, Tf, Ke, illum), with MTL's defaults.
 struct Material {
     std::string name;
+    Vec3 ambient{0, 0, 0};           // Ka: reflects the render file's ambient light
     Vec3 diffuse{0.8f, 0.8f, 0.8f};  // Kd
     Vec3 specular{0, 0, 0};          // Ks
     float shininess = 0.0f;          // Ns
@@ -37,6 +38,7 @@ struct Material {
     bool transmits() const { return transmit_fraction() > 0.0f; }
     /// Spawns reflection rays: a mirror, or a dielectric's Fresnel reflection.
     bool reflects() const { return is_mirror() || transmits(); }
+    bool reflects_ambient() const { return ambient.x > 0 || ambient.y > 0 || ambient.z > 0; }
     bool emits() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
     bool has_highlight() const {
         return (specular.x > 0 || specular.y > 0 || specular.z > 0) && shininess > 0;

@@ -1,0 +1,201 @@
+// test_scene_effects.cpp — what a scene calls for beyond lights and mirrors (issue #15): ambient
+// light by Ka and the image's exposure, against closed forms on a head-on quad, the OpenCL
+// renderer against the reference renderer with them on.
+#include <doctest/doctest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "cl/render/opencl_renderer.h"
+#include "core/frame_pipeline.h"
+#include "core/image.h"
+#include "core/reference_builder.h"
+#include "core/reference_tracer.h"
+#include "core/render_file.h"
+#include "core/render_setup.h"
+#include "tests/support.h"
+#include "tests/test_opencl_fixture.h"
+
+namespace fs = std::filesystem;
+using namespace kdray;
+
+namespace {
+
+/// A 20 x 20 quad at z = 0 facing +z (counter-clockwise seen from +z), Kd = 0.5, and a camera at
+/// z = 5 looking at it head on: every pixel sees the quad, under the headlight with cos = 1 at
+/// the centre.
+Scene head_on_quad() {
+    const float h = 10.0f;
+    Scene scene = make_scene({-h, -h, 0, h, -h, 0, h, h, 0, -h, -h, 0, h, h, 0, -h, h, 0}, "quad");
+    scene.materials[0].diffuse = {0.5f, 0.5f, 0.5f};
+    return scene;
+}
+
+Camera head_on_camera() {
+    Camera camera;
+    camera.position = {0, 0, 5};
+    camera.look_at = {0, 0, 0};
+    camera.fov_y = 60.0f;
+    return camera;
+}
+
+RenderSettings small_settings() {
+    RenderSettings settings;
+    settings.width = 16;
+    settings.height = 12;
+    return settings;
+}
+
+double max_difference(const Image& a, const Image& b) {
+    double worst = 0;
+    for (std::size_t i = 0; i < a.rgb.size(); ++i)
+        worst = std::max(worst, double(std::fabs(a.rgb[i] - b.rgb[i])));
+    return worst;
+}
+
+std::vector<float> read_exr(const fs::path& path) {
+    auto in = OIIO::ImageInput::open(path.string());
+    REQUIRE(in);
+    const OIIO::ImageSpec& spec = in->spec();
+    std::vector<float> pixels(std::size_t(spec.width) * spec.height * 3);
+    REQUIRE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, pixels.data()));
+    return pixels;
+}
+
+}  // namespace
+
+TEST_CASE("ambient: a hit adds Ka x ambient, exactly where nothing else lights it") {
+    Scene scene = head_on_quad();
+    const KdTree tree = build_reference(scene);
+    RenderSettings settings = small_settings();
+    scene.materials[0].ambient = {0.5f, 0.25f, 0.125f};
+    settings.ambient = {0.4f, 0.8f, 1.6f};  // Ka x ambient = 0.2 in every channel
+
+    SUBCASE("Kd 0: the headlight adds nothing, the pixel is Ka x ambient") {
+        scene.materials[0].diffuse = {0, 0, 0};
+        const RenderInputs inputs = prepare_render(scene, settings, head_on_camera(), 0);
+        CHECK(inputs.effects.ambient);
+        CHECK(inputs.effects.ambient_reason.find("'default'") != std::string::npos);
+        const FrameResult frame = render_reference(tree, scene, inputs, 1);
+        for (float v : frame.image.rgb) CHECK(v == doctest::Approx(0.2).epsilon(1e-6));
+    }
+    SUBCASE("beside a light from behind the quad (lights nothing), Kd 0.5 adds nothing either") {
+        settings.lights.push_back(Light{Light::Type::directional, {}, {0, 0, 1}, {9, 9, 9}});
+        const RenderInputs inputs = prepare_render(scene, settings, head_on_camera(), 0);
+        const FrameResult frame = render_reference(tree, scene, inputs, 1);
+        for (float v : frame.image.rgb) CHECK(v == doctest::Approx(0.2).epsilon(1e-6));
+    }
+    SUBCASE("with the headlight on Kd 0.5: Kd / pi + Ka x ambient at the centre") {
+        settings.width = settings.height = 1;  // the one pixel's ray is the view direction
+        const RenderInputs inputs = prepare_render(scene, settings, head_on_camera(), 0);
+        const FrameResult frame = render_reference(tree, scene, inputs, 1);
+        for (float v : frame.image.rgb)
+            CHECK(v == doctest::Approx(0.5 / std::numbers::pi + 0.2).epsilon(1e-6));
+    }
+    SUBCASE("no ambient light, or no Ka: the effect is off and Ka adds nothing") {
+        settings.width = settings.height = 1;
+        for (int which = 0; which < 2; ++which) {
+            CAPTURE(which);
+            Scene s = scene;
+            RenderSettings r = settings;
+            if (which == 0)
+                r.ambient = {0, 0, 0};
+            else
+                s.materials[0].ambient = {0, 0, 0};
+            const RenderInputs inputs = prepare_render(s, r, head_on_camera(), 0);
+            CHECK_FALSE(inputs.effects.ambient);
+            CHECK((inputs.effects.bits() & KDRAY_EFFECT_AMBIENT) == 0u);
+            CHECK(inputs.effects.to_json()["reasons"]["ambient"] ==
+                  (which == 0 ? "the render file has no ambient light"
+                              : "no material reflects ambient light (Ka 0)"));
+            const FrameResult frame = render_reference(tree, s, inputs, 1);
+            for (float v : frame.image.rgb)
+                CHECK(v == doctest::Approx(0.5 / std::numbers::pi).epsilon(1e-6));
+        }
+    }
+}
+
+TEST_CASE("ambient: the OpenCL renderer's image is the reference's") {
+    Scene scene = test::random_triangles(400, 5);
+    Material tinted;
+    tinted.name = "tinted";
+    tinted.ambient = {0.3f, 0.6f, 0.9f};
+    tinted.diffuse = {0.2f, 0.4f, 0.1f};
+    scene.materials.push_back(tinted);
+    for (std::size_t t = 0; t < scene.triangle_count(); t += 3) scene.material_ids[t] = 1;
+    const KdTree tree = build_reference(scene);
+    RenderSettings settings = small_settings();
+    settings.width = 40;
+    settings.height = 30;
+    settings.ambient = {0.25f, 0.5f, 0.125f};
+    Camera camera;
+    camera.position = {1.8f, 1.6f, 2.4f};
+    camera.look_at = {0.5f, 0.5f, 0.5f};
+    for (bool lights : {false, true}) {
+        CAPTURE(lights);
+        if (lights)
+            settings.lights.push_back(Light{Light::Type::point, {0.5f, 3, 0.5f}, {}, {4, 4, 4}});
+        const RenderInputs inputs = prepare_render(scene, settings, camera, 0);
+        REQUIRE(inputs.effects.ambient);
+        const FrameResult device = render_opencl(test::opencl_test_device(), tree, scene, inputs);
+        const FrameResult host = render_reference(tree, scene, inputs, 2);
+        CHECK(max_difference(device.image, host.image) < 1e-4);
+        // Ambient light is no ray: the counts are those of the lights alone.
+        CHECK(device.rays.shadow == host.rays.shadow);
+        CHECK(device.rays.primary == 40u * 30u);
+    }
+}
+
+TEST_CASE("exposure: each stop doubles the EXR's linear values; PNG clamps 2^e x radiance") {
+    const fs::path dir = test::fresh_temp_dir("exposure");
+    const Scene scene = head_on_quad();
+    ReferenceTreeBuilder builder({});
+    ReferenceTracer tracer(1);
+    std::vector<std::vector<float>> exr;
+    for (int stops : {0, 1, 2, -3}) {
+        RenderSettings settings = small_settings();
+        settings.width = settings.height = 1;
+        settings.camera_keys = {CameraKey{0, head_on_camera()}};
+        settings.camera_given = true;
+        settings.exposure = float(stops);
+        FrameOptions options;
+        options.out_dir = dir / std::to_string(stops);
+        options.format = "exr";
+        fs::create_directories(options.out_dir);
+        FramePipeline pipeline(builder, tracer, settings, options);
+        pipeline.render_frame({0, (dir / "quad.obj").string(), &scene});
+        exr.push_back(read_exr(options.out_dir / "quad.exr"));
+    }
+    // The headlight on Kd 0.5 at cos 1: 0.5 / pi, times 2^stops exactly (a power of two).
+    for (float v : exr[0]) CHECK(v == doctest::Approx(0.5 / std::numbers::pi).epsilon(1e-6));
+    for (int c = 0; c < 3; ++c) {
+        CHECK(exr[1][c] == 2.0f * exr[0][c]);
+        CHECK(exr[2][c] == 4.0f * exr[0][c]);
+        CHECK(exr[3][c] == exr[0][c] / 8.0f);
+    }
+
+    // PNG: 2^1 x 0.159 = 0.318 encodes as sRGB; 2^3 x 0.159 = 1.27 clamps to white.
+    Image grey{1,
+               1,
+               {0.5f / std::numbers::pi_v<float>, 0.5f / std::numbers::pi_v<float>,
+                0.5f / std::numbers::pi_v<float>}};
+    const auto png_byte = [&](float stops) {
+        write_image(dir / "grey.png", grey, stops);
+        auto in = OIIO::ImageInput::open((dir / "grey.png").string());
+        REQUIRE(in);
+        std::uint8_t rgb[3];
+        REQUIRE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, rgb));
+        return int(rgb[0]);
+    };
+    const double linear = 2.0 * 0.5 / std::numbers::pi;
+    const double encoded = 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;  // IEC 61966-2-1
+    CHECK(png_byte(1.0f) == int(std::lround(encoded * 255.0)));
+    CHECK(png_byte(3.0f) == 255);
+    fs::remove_all(dir);
+}
