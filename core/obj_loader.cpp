@@ -153,6 +153,58 @@ Material to_material(const tinyobj::material_t& m) {
     return out;
 }
 
+/// One warning for each MTL statement of `m` that kdray reads but does not simulate, so that a
+/// scene never renders differently from what its files ask for without a word: texture and
+/// bump maps, PBR parameters, a transmission filter on an opaque material, and every statement
+/// tinyobjloader does not know (decal, sharpness, ...). Once per material and statement, however
+/// many faces use it.
+void warn_unsimulated(const tinyobj::material_t& m, const Material& material,
+                      const std::string& file, std::vector<std::string>& warnings) {
+    const auto warn = [&](const std::string& statement, const std::string& what) {
+        warnings.push_back(file + ": material '" + m.name + "': " + statement +
+                           " is not simulated (" + what + ")");
+    };
+    const struct {
+        const std::string& name;
+        const char* statement;
+        const char* what;
+    } maps[] = {
+        {m.diffuse_texname, "map_Kd", "Kd renders untextured"},
+        {m.ambient_texname, "map_Ka", "Ka renders untextured"},
+        {m.specular_texname, "map_Ks", "Ks renders untextured"},
+        {m.specular_highlight_texname, "map_Ns", "Ns renders untextured"},
+        {m.bump_texname, "map_bump/bump", "the surface renders unbumped"},
+        {m.displacement_texname, "disp", "the surface renders undisplaced"},
+        {m.alpha_texname, "map_d", "d renders untextured"},
+        {m.reflection_texname, "refl", "no reflection map"},
+        {m.roughness_texname, "map_Pr", "PBR roughness"},
+        {m.metallic_texname, "map_Pm", "PBR metallic"},
+        {m.sheen_texname, "map_Ps", "PBR sheen"},
+        {m.emissive_texname, "map_Ke", "Ke renders untextured"},
+        {m.normal_texname, "norm", "the surface renders without its normal map"},
+    };
+    for (const auto& map : maps)
+        if (!map.name.empty()) warn(std::string(map.statement) + " '" + map.name + "'", map.what);
+    const struct {
+        tinyobj::real_t value;
+        const char* statement;
+    } pbr[] = {{m.roughness, "Pr"},
+               {m.metallic, "Pm"},
+               {m.sheen, "Ps"},
+               {m.clearcoat_thickness, "Pc"},
+               {m.clearcoat_roughness, "Pcr"},
+               {m.anisotropy, "aniso"},
+               {m.anisotropy_rotation, "anisor"}};
+    for (const auto& p : pbr)
+        if (p.value != 0) warn(p.statement, "PBR parameter");
+    // Tf 0 0 0 (absent) and 1 1 1 (the common "no filter") filter nothing on an opaque material.
+    const Vec3 tf = material.transmission;
+    if (!material.transmits() && !(tf == Vec3{0, 0, 0}) && !(tf == Vec3{1, 1, 1}))
+        warn("Tf", "the material is opaque: nothing is transmitted to filter");
+    for (const auto& [statement, value] : m.unknown_parameter)
+        warn(statement, "kdray does not read this statement");
+}
+
 bool starts_with(std::string_view s, std::string_view prefix) {
     return s.substr(0, prefix.size()) == prefix;
 }
@@ -230,6 +282,7 @@ Scene load_obj(const std::filesystem::path& path) {
     for (const tinyobj::material_t& m : obj.materials) {
         scene.materials.push_back(to_material(m));
         const Material& material = scene.materials.back();
+        warn_unsimulated(m, material, name, scene.warnings);
         // BART writes Ni 0 for opaque materials, and for some that transmit (the Robots' m49);
         // those refract with Ni 1, which bends nothing: said, not silent.
         if (material.transmits() && !(material.ior > 0.0f))

@@ -1,6 +1,7 @@
 // test_scene_effects.cpp — what a scene calls for beyond lights and mirrors (issue #15): ambient
 // light by Ka and the image's exposure, against closed forms on a head-on quad, the OpenCL
-// renderer against the reference renderer with them on.
+// renderer against the reference renderer with them on, and the warnings about what an MTL file
+// asks for that kdray does not simulate.
 #include <doctest/doctest.h>
 
 #include <OpenImageIO/imageio.h>
@@ -9,6 +10,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <numbers>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -19,6 +21,7 @@
 #include "core/reference_tracer.h"
 #include "core/render_file.h"
 #include "core/render_setup.h"
+#include "core/scene.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
 
@@ -197,5 +200,61 @@ TEST_CASE("exposure: each stop doubles the EXR's linear values; PNG clamps 2^e x
     const double encoded = 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;  // IEC 61966-2-1
     CHECK(png_byte(1.0f) == int(std::lround(encoded * 255.0)));
     CHECK(png_byte(3.0f) == 255);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("warnings: one per material and statement read but not simulated, not per face") {
+    const fs::path dir = test::fresh_temp_dir("unsimulated");
+    test::write_text_file(dir / "scene.mtl", R"(newmtl bumpy
+Kd 0.5 0.5 0.5
+map_bump -bm 0.5 bump.png
+map_Ks spec.png
+map_d alpha.png
+map_Ns gloss.png
+disp height.png
+decal sticker.png
+refl -type sphere sky.png
+Tf 1 0.5 1
+newmtl plain
+Kd 0.2 0.2 0.2
+Tf 1 1 1
+newmtl textured
+map_Kd wood.png
+map_Ka wood_ao.png
+bump other.png
+)");
+    std::string obj = "mtllib scene.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+    for (const char* material : {"bumpy", "plain", "textured"}) {
+        obj += std::string("usemtl ") + material + "\n";
+        for (int face = 0; face < 4; ++face) obj += "f 1 2 3\nf 1 3 4\n";
+    }
+    const fs::path path = test::write_text_file(dir / "scene.obj", obj);
+    const Scene scene = load_obj(path);
+    REQUIRE(scene.triangle_count() == 24u);
+    std::multiset<std::string> warned;  // "material statement"
+    for (const std::string& w : scene.warnings) {
+        CAPTURE(w);
+        REQUIRE(w.find(path.string() + ": material '") == 0);
+        CHECK(w.find(" is not simulated (") != std::string::npos);
+        const std::size_t name = w.find('\'') + 1, end = w.find('\'', name);
+        const std::string statement = w.substr(end + 3, w.find_first_of(" ", end + 3) - end - 3);
+        warned.insert(w.substr(name, end - name) + " " + statement);
+    }
+    const std::multiset<std::string> expected = {"bumpy map_bump/bump",
+                                                 "bumpy map_Ks",
+                                                 "bumpy map_d",
+                                                 "bumpy map_Ns",
+                                                 "bumpy disp",
+                                                 "bumpy decal",
+                                                 "bumpy refl",
+                                                 "bumpy Tf",
+                                                 "textured map_Kd",
+                                                 "textured map_Ka",
+                                                 "textured map_bump/bump"};
+    CHECK(warned == expected);
+    // The files are named, so that a reader knows which map is missing from the image.
+    bool names_file = false;
+    for (const std::string& w : scene.warnings) names_file |= w.find("'wood.png'") != w.npos;
+    CHECK(names_file);
     fs::remove_all(dir);
 }
