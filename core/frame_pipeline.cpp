@@ -79,7 +79,8 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
          {{"primary", rays.primary},
           {"shadow", rays.shadow},
           {"reflection", rays.reflection},
-          {"refraction", rays.refraction}}},
+          {"refraction", rays.refraction},
+          {"area_shadow", rays.area_shadow}}},
         {"hit_pixels", hit_pixels},
         {"mrays_per_s", trace_ms > 0 ? double(rays.total()) / (trace_ms * 1e3) : 0.0}};
     if (options_.aov) frame["aov"] = aov_path.filename().string();

@@ -138,7 +138,8 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_EFFECT_SHADOWS 1u
 #define KDRAY_EFFECT_REFLECTION 2u
 #define KDRAY_EFFECT_REFRACTION 4u
-#define KDRAY_EFFECT_AMBIENT 8u /* Ka x the render file's ambient light */
+#define KDRAY_EFFECT_AMBIENT 8u      /* Ka x the render file's ambient light */
+#define KDRAY_EFFECT_AREA_LIGHTS 16u /* emissive triangles light the scene (kd_area_light.h) */
 
 /* What kd_render_pixels reads and writes besides the image and the centre hits (its `outputs`
  * argument): the primary rays' hits come traced already (by kd_trace_camera_packets), so do the
@@ -197,13 +198,25 @@ typedef struct KdLight {
     kd_u32 pad;
 } KdLight;
 
+/* KdEmitter — 16 bytes: one emissive triangle of a frame's table, which the host builds in order
+ * of triangle id. triangle: its id; cdf: the probability of choosing it or one before it (the
+ * last entry's is 1); probability: of choosing it, luminance(Ke) x area / the table's total;
+ * pad: 0. */
+typedef struct KdEmitter {
+    kd_u32 triangle;
+    kd_f32 cdf;
+    kd_f32 probability;
+    kd_u32 pad;
+} KdEmitter;
+
 /* KdView — 112 bytes: the camera basis of conventions.md and the frame's render settings.
  *   origin, forward, right, up: camera position and unit basis; tan_half_fov = tan(fov_y / 2);
  *   aspect = width / height; background colour; spp samples per pixel; max_depth <=
  *   KDRAY_MAX_BOUNCES; light_count lights, which shine only with KDRAY_EFFECT_SHADOWS (without:
  *   a headlight along the view direction, no shadow rays); effects KDRAY_EFFECT_* bits; seed
  *   for the sample jitter; ray_epsilon: how far secondary rays start off the surface (scaled to
- *   the scene by the host); pad: 0. */
+ *   the scene by the host); emitter_count: entries of the emitter table (read only with
+ *   KDRAY_EFFECT_AREA_LIGHTS); pad: 0. */
 typedef struct KdView {
     kd_f32 origin[3];
     kd_f32 tan_half_fov;
@@ -220,22 +233,26 @@ typedef struct KdView {
     kd_u32 effects;
     kd_u32 seed;
     kd_f32 ray_epsilon;
-    kd_u32 pad[3];
+    kd_u32 emitter_count;
+    kd_u32 pad[2];
 } KdView;
 
-/* KdRayCounts — 16 bytes: rays cast for one pixel, by kind. */
+/* KdRayCounts — 20 bytes: rays cast for one pixel, by kind; area_shadow: shadow rays toward
+ * points on emissive triangles (shadow: toward the render file's lights). */
 typedef struct KdRayCounts {
     kd_u32 primary;
     kd_u32 shadow;
     kd_u32 reflection;
     kd_u32 refraction;
+    kd_u32 area_shadow;
 } KdRayCounts;
 
 #ifndef KDRAY_DEVICE_CODE
 static_assert(sizeof(KdMaterial) == 80, "KdMaterial is 80 bytes on every device");
 static_assert(sizeof(KdLight) == 32, "KdLight is 32 bytes on every device");
 static_assert(sizeof(KdView) == 112, "KdView is 112 bytes on every device");
-static_assert(sizeof(KdRayCounts) == 16, "KdRayCounts is 16 bytes on every device");
+static_assert(sizeof(KdRayCounts) == 20, "KdRayCounts is 20 bytes on every device");
+static_assert(sizeof(KdEmitter) == 16, "KdEmitter is 16 bytes on every device");
 #endif
 
 #endif /* KDRAY_KD_SHARED_H */

@@ -120,6 +120,7 @@ FrameResult render_reference(const KdTree& tree, const Scene& scene, const Rende
                            scene.material_ids.data(),
                            inputs.materials.data(),
                            inputs.lights.data(),
+                           inputs.emitters.data(),
                            {},
                            inputs.intersect};
     std::copy(in.bounds, in.bounds + 6, scene_view.bounds);

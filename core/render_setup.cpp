@@ -10,7 +10,8 @@ namespace kdray {
 
 kd_u32 Effects::bits() const {
     return (shadows ? KDRAY_EFFECT_SHADOWS : 0u) | (reflection ? KDRAY_EFFECT_REFLECTION : 0u) |
-           (refraction ? KDRAY_EFFECT_REFRACTION : 0u) | (ambient ? KDRAY_EFFECT_AMBIENT : 0u);
+           (refraction ? KDRAY_EFFECT_REFRACTION : 0u) | (ambient ? KDRAY_EFFECT_AMBIENT : 0u) |
+           (area_lights ? KDRAY_EFFECT_AREA_LIGHTS : 0u);
 }
 
 nlohmann::json Effects::to_json() const {
@@ -18,11 +19,13 @@ nlohmann::json Effects::to_json() const {
             {"reflection", reflection},
             {"refraction", refraction},
             {"ambient", ambient},
+            {"area_lights", area_lights},
             {"reasons",
              {{"shadows", shadows_reason},
               {"reflection", reflection_reason},
               {"refraction", refraction_reason},
-              {"ambient", ambient_reason}}}};
+              {"ambient", ambient_reason},
+              {"area_lights", area_lights_reason}}}};
 }
 
 Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
@@ -46,8 +49,25 @@ Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
         e.ambient = true;
         e.ambient_reason = "ambient light and material '" + ambient->name + "' has Ka > 0";
     }
+    // The first triangle with some area whose material emits: the scene has area lights.
+    const Material* emitter = nullptr;
+    for (std::size_t t = 0; t < scene.triangle_count() && !emitter; ++t) {
+        const Material& m = scene.materials.at(scene.material_ids[t]);
+        double cross[3];
+        if (m.emits())
+            triangle_cross_double(&scene.triangles[t * KDRAY_FLOATS_PER_TRIANGLE], cross);
+        if (m.emits() && (cross[0] != 0 || cross[1] != 0 || cross[2] != 0)) emitter = &m;
+    }
+    if (emitter) {
+        e.area_lights = true;
+        e.area_lights_reason = "material '" + emitter->name + "' emits (Ke > 0)";
+    } else {
+        e.area_lights_reason = "no triangle emits";
+    }
     if (settings.lights.empty()) {
-        e.shadows_reason = "the render file has no lights (a headlight casts no visible shadow)";
+        e.shadows_reason = emitter ? "the render file has no lights (the emitters light the scene)"
+                                   : "the render file has no lights (a headlight casts no "
+                                     "visible shadow)";
     } else {
         e.shadows = true;
         e.shadows_reason = std::to_string(settings.lights.size()) + " light(s)";
@@ -93,6 +113,38 @@ KdMaterial to_device_material(const Material& m, const Vec3& ambient) {
     return d;
 }
 
+std::vector<KdEmitter> emitter_table(const Scene& scene) {
+    std::vector<KdEmitter> table;
+    std::vector<double> power;
+    double total = 0;
+    for (std::size_t t = 0; t < scene.triangle_count(); ++t) {
+        const Material& m = scene.materials.at(scene.material_ids[t]);
+        if (!m.emits()) continue;
+        double cross[3];
+        triangle_cross_double(&scene.triangles[t * KDRAY_FLOATS_PER_TRIANGLE], cross);
+        const double area =
+            0.5 * std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+        const double luminance =
+            0.2126 * m.emission.x + 0.7152 * m.emission.y + 0.0722 * m.emission.z;
+        if (!(area > 0 && luminance > 0)) continue;
+        table.push_back(KdEmitter{kd_u32(t), 0.0f, 0.0f, 0u});
+        power.push_back(area * luminance);
+        total += area * luminance;
+    }
+    // The CDF in double, rounded once per entry; each entry's probability is the width of its
+    // interval in float, exactly the chance that a uniform float falls in it.
+    double running = 0;
+    float below = 0.0f;
+    for (std::size_t i = 0; i < table.size(); ++i) {
+        running += power[i];
+        const float cdf = i + 1 == table.size() ? 1.0f : float(running / total);
+        table[i].cdf = cdf;
+        table[i].probability = cdf - below;
+        below = cdf;
+    }
+    return table;
+}
+
 KdLight to_device_light(const Light& light) {
     KdLight d{};
     Vec3 v = light.type == Light::Type::point ? light.position : normalize(light.direction);
@@ -133,6 +185,9 @@ RenderInputs prepare_render(const Scene& scene, const RenderSettings& settings,
     for (const Material& m : scene.materials)
         in.materials.push_back(to_device_material(m, settings.ambient));
     for (const Light& l : settings.lights) in.lights.push_back(to_device_light(l));
+    if (in.effects.area_lights) in.emitters = emitter_table(scene);
+    in.view.emitter_count = kd_u32(in.emitters.size());
+    if (in.emitters.empty()) in.emitters.push_back(KdEmitter{});
     if (in.lights.empty()) in.lights.push_back(KdLight{});  // never a zero-size device buffer
     return in;
 }

@@ -258,3 +258,160 @@ bump other.png
     CHECK(names_file);
     fs::remove_all(dir);
 }
+
+namespace {
+
+/// The view factor from a differential area to a parallel rectangle a x b at height h, the area
+/// lying under one of its corners (Howell's catalogue of configuration factors, B-1... C-11):
+/// F = 1 / (2 pi) [A / sqrt(1 + A^2) atan(B / sqrt(1 + A^2)) + B / sqrt(1 + B^2) atan(A /
+/// sqrt(1 + B^2))], A = a / h, B = b / h.
+double corner_view_factor(double a, double b, double h) {
+    const double A = a / h, B = b / h, sa = std::sqrt(1 + A * A), sb = std::sqrt(1 + B * B);
+    return (A / sa * std::atan(B / sa) + B / sb * std::atan(A / sb)) / (2 * std::numbers::pi);
+}
+
+/// A floor (z = 0, facing up, Kd 0.5) under a square emitter of side 1 at z = 1, centred over the
+/// origin, emitting Ke = (1, 0.5, 0.25) downwards, or upwards when `facing_up`.
+Scene floor_under_panel(bool facing_up) {
+    const float f = 10.0f;
+    std::vector<float> t = {-f, -f, 0, f, -f, 0, f, f, 0, -f, -f, 0, f, f, 0, -f, f, 0};
+    // Clockwise seen from above: the winding normal points down (-z).
+    std::vector<float> panel = {-0.5f, -0.5f, 1, -0.5f, 0.5f, 1, 0.5f, 0.5f,  1,
+                                -0.5f, -0.5f, 1, 0.5f,  0.5f, 1, 0.5f, -0.5f, 1};
+    if (facing_up)
+        for (int tri = 0; tri < 2; ++tri)
+            for (int a = 0; a < 3; ++a) std::swap(panel[9 * tri + 3 + a], panel[9 * tri + 6 + a]);
+    t.insert(t.end(), panel.begin(), panel.end());
+    Scene scene = make_scene(t, "panel");
+    scene.materials[0].diffuse = {0.5f, 0.5f, 0.5f};
+    Material light;
+    light.name = "panel";
+    light.diffuse = {0, 0, 0};
+    light.emission = {1.0f, 0.5f, 0.25f};
+    scene.materials.push_back(light);
+    scene.material_ids = {0, 0, 1, 1};
+    return scene;
+}
+
+/// One pixel, a narrow view of the floor's origin from the side, below the panel.
+RenderSettings floor_pixel(int spp) {
+    RenderSettings settings;
+    settings.width = settings.height = 1;
+    settings.spp = spp;
+    Camera camera;
+    camera.position = {0, -3, 0.5f};
+    camera.look_at = {0, 0, 0};
+    camera.up = {0, 0, 1};
+    camera.fov_y = 0.2f;
+    settings.camera_keys = {CameraKey{0, camera}};
+    settings.camera_given = true;
+    return settings;
+}
+
+}  // namespace
+
+TEST_CASE("area lights: a floor under a square panel has the closed-form radiance") {
+    const Scene scene = floor_under_panel(false);
+    const KdTree tree = build_reference(scene);
+    const RenderSettings settings = floor_pixel(16384);
+    const RenderInputs inputs = prepare_render(scene, settings, settings.camera_at(0), 0);
+    REQUIRE(inputs.effects.area_lights);
+    CHECK_FALSE(inputs.effects.shadows);
+    REQUIRE(inputs.view.emitter_count == 2u);
+    // Equal areas and one Ke: each triangle of the panel is chosen half the time.
+    CHECK(inputs.emitters[0].probability == 0.5f);
+    CHECK(inputs.emitters[1].cdf == 1.0f);
+    // E = pi L F, F four times the corner factor of a half-side square; L_floor = Kd / pi E.
+    const double view_factor = 4 * corner_view_factor(0.5, 0.5, 1.0);
+    const double ke[3] = {1.0, 0.5, 0.25};
+    for (const bool device : {false, true}) {
+        CAPTURE(device);
+        const FrameResult frame =
+            device ? render_opencl(test::opencl_test_device(), tree, scene, inputs)
+                   : render_reference(tree, scene, inputs, 2);
+        REQUIRE(frame.hits.hits[0].prim < 2u);  // the centre ray sees the floor
+        // One area-light shadow ray per sample, none toward lights (there are none).
+        CHECK(frame.rays.area_shadow == 16384u);
+        CHECK(frame.rays.shadow == 0u);
+        // The one-sample estimator's relative spread here is about 0.2; 16384 samples: 0.0016.
+        for (int c = 0; c < 3; ++c)
+            CHECK(frame.image.rgb[c] == doctest::Approx(0.5 * ke[c] * view_factor).epsilon(0.01));
+    }
+}
+
+TEST_CASE("area lights: an emitter lights and shows only its front side") {
+    const Scene away = floor_under_panel(true);
+    const KdTree tree = build_reference(away);
+    SUBCASE("the floor under a panel that faces away is black: no headlight, no light") {
+        const RenderSettings settings = floor_pixel(64);
+        const RenderInputs inputs = prepare_render(away, settings, settings.camera_at(0), 0);
+        REQUIRE(inputs.effects.area_lights);
+        const FrameResult frame = render_reference(tree, away, inputs, 1);
+        REQUIRE(frame.hits.hits[0].prim < 2u);
+        for (int c = 0; c < 3; ++c) CHECK(frame.image.rgb[c] == 0.0f);
+        CHECK(frame.rays.area_shadow == 0u);  // the panel's back: no ray toward it
+    }
+    SUBCASE("seen from below, the downward panel is Ke; the upward one black") {
+        RenderSettings settings = floor_pixel(1);
+        Camera camera = settings.camera_at(0);
+        camera.position = {0.1f, -0.2f, 0.2f};
+        camera.look_at = {0.1f, 0.1f, 1.0f};
+        settings.camera_keys = {CameraKey{0, camera}};
+        for (const bool facing_up : {false, true}) {
+            CAPTURE(facing_up);
+            const Scene scene = floor_under_panel(facing_up);
+            const KdTree t = build_reference(scene);
+            const RenderInputs inputs = prepare_render(scene, settings, camera, 0);
+            const FrameResult frame = render_reference(t, scene, inputs, 1);
+            REQUIRE(frame.hits.hits[0].prim >= 2u);  // the panel
+            const float expected[3] = {1.0f, 0.5f, 0.25f};
+            for (int c = 0; c < 3; ++c)
+                CHECK(frame.image.rgb[c] == (facing_up ? 0.0f : expected[c]));
+        }
+    }
+}
+
+TEST_CASE("area lights: the OpenCL renderer's image is the reference's") {
+    Scene scene = test::random_triangles(600, 17);
+    Material light;
+    light.name = "light";
+    light.emission = {4.0f, 3.0f, 2.0f};
+    scene.materials.push_back(light);
+    for (std::size_t t = 0; t < scene.triangle_count(); t += 7) scene.material_ids[t] = 1;
+    const KdTree tree = build_reference(scene);
+    Camera camera;
+    camera.position = {1.8f, 1.6f, 2.4f};
+    camera.look_at = {0.5f, 0.5f, 0.5f};
+    for (const int spp : {1, 4}) {
+        for (const bool lights : {false, true}) {
+            CAPTURE(spp);
+            CAPTURE(lights);
+            RenderSettings settings = small_settings();
+            settings.width = 40;
+            settings.height = 30;
+            settings.spp = spp;
+            if (lights)
+                settings.lights.push_back(
+                    Light{Light::Type::point, {0.5f, 3, 0.5f}, {}, {4, 4, 4}});
+            const RenderInputs inputs = prepare_render(scene, settings, camera, 0);
+            REQUIRE(inputs.effects.area_lights);
+            const FrameResult device =
+                render_opencl(test::opencl_test_device(), tree, scene, inputs);
+            const FrameResult host = render_reference(tree, scene, inputs, 2);
+            CHECK(host.rays.area_shadow > 0u);
+            CHECK(device.rays.area_shadow == host.rays.area_shadow);
+            CHECK(device.rays.shadow == host.rays.shadow);
+            CHECK(max_difference(device.image, host.image) < 1e-4);
+        }
+    }
+}
+
+TEST_CASE("area lights: a frame without emitters has no emitter table and a headlight") {
+    const Scene scene = head_on_quad();
+    RenderSettings settings = small_settings();
+    const RenderInputs inputs = prepare_render(scene, settings, head_on_camera(), 0);
+    CHECK_FALSE(inputs.effects.area_lights);
+    CHECK(inputs.effects.area_lights_reason == "no triangle emits");
+    CHECK(inputs.view.emitter_count == 0u);
+    CHECK((inputs.effects.bits() & KDRAY_EFFECT_AREA_LIGHTS) == 0u);
+}
