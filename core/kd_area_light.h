@@ -58,12 +58,13 @@ KDRAY_INLINE kd_u32 kd_pick_emitter(KDRAY_GLOBAL const KdEmitter* emitters, kd_u
 }
 
 /* One sample of the light of the frame's emitters at p (geometric normal ng, facing the viewer;
- * shading normal ns) for the eye direction `dir`, reflected by m (kd_reflected, the BRDF times
+ * shading normal ns) for the eye direction `dir`, reflected by m with the diffuse colour
+ * `diffuse` (kd_reflected, the BRDF times
  * the cosine, as the point and directional lights are), into out; one area-light shadow ray. */
 KDRAY_HOT_INLINE void kd_area_light(const KdSceneView* scene, const KdView* view,
-                                    KDRAY_GLOBAL const KdMaterial* m, const kd_f32* p,
-                                    const kd_f32* ng, const kd_f32* ns, const kd_f32* dir,
-                                    kd_f32* out, KdRayCounts* rays) {
+                                    KDRAY_GLOBAL const KdMaterial* m, const kd_f32* diffuse,
+                                    const kd_f32* p, const kd_f32* ng, const kd_f32* ns,
+                                    const kd_f32* dir, kd_f32* out, KdRayCounts* rays) {
     const kd_u32 h0 = kd_shading_key(view, p, dir), h1 = kd_hash(h0), h2 = kd_hash(h1);
     KDRAY_GLOBAL const KdEmitter* e =
         scene->emitters + kd_pick_emitter(scene->emitters, view->emitter_count, kd_unit_float(h0));
@@ -102,7 +103,7 @@ KDRAY_HOT_INLINE void kd_area_light(const KdSceneView* scene, const KdView* view
     KDRAY_GLOBAL const KdMaterial* light = scene->materials + scene->material_ids[e->triangle];
     kd_f32 irradiance[3];
     for (int c = 0; c < 3; ++c) irradiance[c] = light->emission[c] * scale;
-    kd_reflected(m, ns, dir, to_light, irradiance, cos_l, out);
+    kd_reflected(m, diffuse, ns, dir, to_light, irradiance, cos_l, out);
 }
 
 #endif /* KDRAY_KD_AREA_LIGHT_H */

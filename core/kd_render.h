@@ -26,11 +26,13 @@
 #define KDRAY_SQRT sqrt
 #define KDRAY_EXP2 exp2
 #define KDRAY_LOG2 log2
+#define KDRAY_FLOOR floor
 #else
 #define KDRAY_EFFECT_ON(view, bit) (((view)->effects & (bit)) != 0u)
 #define KDRAY_SQRT std::sqrt
 #define KDRAY_EXP2 std::exp2
 #define KDRAY_LOG2 std::log2
+#define KDRAY_FLOOR std::floor
 #endif
 
 #define KDRAY_PI 3.14159265358979323846f
@@ -50,6 +52,11 @@ typedef struct KdSceneView {
     KDRAY_GLOBAL const KdLight* lights;
     /* The frame's emitter table (view->emitter_count entries; read with area lights only). */
     KDRAY_GLOBAL const KdEmitter* emitters;
+    /* With textures only: each triangle's vt corners (6 floats, u NaN where it has none), the
+     * texture table and the texel atlas (kd_texture.h). */
+    KDRAY_GLOBAL const kd_f32* texcoords;
+    KDRAY_GLOBAL const KdTexture* textures;
+    KDRAY_GLOBAL const kd_f32* texels;
     kd_f32 bounds[6];
     kd_u32 intersect; /* KDRAY_INTERSECT_*: the ray-triangle test (a kernel's is compiled in) */
 } KdSceneView;
@@ -308,9 +315,9 @@ KDRAY_HOT_INLINE KdRay kd_shadow_ray(const KdView* view, const kd_f32* p, const 
 
 /* What m reflects toward the eye (direction `dir` of the ray that arrived) of the irradiance a
  * light brings from direction to_light at cosine cos_l with the shading normal ns: Lambert
- * diffuse and the Blinn-Phong highlight, added to out. */
-KDRAY_HOT_INLINE void kd_reflected(KDRAY_GLOBAL const KdMaterial* m, const kd_f32* ns,
-                                   const kd_f32* dir, const kd_f32* to_light,
+ * diffuse (of colour `diffuse`, Kd textured) and the Blinn-Phong highlight, added to out. */
+KDRAY_HOT_INLINE void kd_reflected(KDRAY_GLOBAL const KdMaterial* m, const kd_f32* diffuse,
+                                   const kd_f32* ns, const kd_f32* dir, const kd_f32* to_light,
                                    const kd_f32* irradiance, kd_f32 cos_l, kd_f32* out) {
     kd_f32 highlight = 0.0f;
     if (m->flags & KDRAY_MATERIAL_HIGHLIGHT) {
@@ -323,10 +330,11 @@ KDRAY_HOT_INLINE void kd_reflected(KDRAY_GLOBAL const KdMaterial* m, const kd_f3
                 (m->shininess + 8.0f) / (8.0f * KDRAY_PI) * kd_pow_positive(cos_h, m->shininess);
     }
     for (int c = 0; c < 3; ++c)
-        out[c] += (m->diffuse[c] / KDRAY_PI + m->specular[c] * highlight) * irradiance[c] * cos_l;
+        out[c] += (diffuse[c] / KDRAY_PI + m->specular[c] * highlight) * irradiance[c] * cos_l;
 }
 
 #include "core/kd_area_light.h"
+#include "core/kd_texture.h"
 
 /* Direct light at p (geometric normal ng, facing the viewer; shading normal ns) for the eye
  * direction `dir`: the ambient light it reflects (with KDRAY_EFFECT_AMBIENT), and diffuse and
@@ -336,13 +344,15 @@ KDRAY_HOT_INLINE void kd_reflected(KDRAY_GLOBAL const KdMaterial* m, const kd_f3
  * occluded, when not 0, says which of the shadow rays from p are blocked (bit i for light i, as
  * kd_trace_shadow_packets traced them); else each shadow ray is traced here. */
 KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
-                                      KDRAY_GLOBAL const KdMaterial* m, const kd_f32* p,
+                                      KDRAY_GLOBAL const KdMaterial* m, KdHit hit, const kd_f32* p,
                                       const kd_f32* ng, const kd_f32* ns, const kd_f32* dir,
                                       KDRAY_GLOBAL const kd_u32* occluded, kd_f32* out,
                                       KdRayCounts* rays) {
+    kd_f32 diffuse[3], ambient[3];
+    kd_surface_colours(scene, view, m, hit, diffuse, ambient);
     /* Ambient light, reflected by Ka (the material's ambient holds Ka x the render file's). */
     if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AMBIENT))
-        for (int c = 0; c < 3; ++c) out[c] += m->ambient[c];
+        for (int c = 0; c < 3; ++c) out[c] += ambient[c];
     const kd_u32 light_count = kd_shining_lights(view);
     /* The headlight only when there are neither lights nor emitters (conventions.md). */
     const kd_u32 lights = light_count != 0u
@@ -359,10 +369,10 @@ KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* vi
                          : kd_scene_occluded(scene, kd_shadow_ray(view, p, ng, to_light, distance)))
                 continue;
         }
-        kd_reflected(m, ns, dir, to_light, irradiance, cos_l, out);
+        kd_reflected(m, diffuse, ns, dir, to_light, irradiance, cos_l, out);
     }
     if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS))
-        kd_area_light(scene, view, m, p, ng, ns, dir, out, rays);
+        kd_area_light(scene, view, m, diffuse, p, ng, ns, dir, out, rays);
 }
 
 /* One sample when neither reflection nor refraction is on: the primary ray and its direct light,
@@ -394,7 +404,7 @@ KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdV
     kd_shading_normal(scene, hit, ng, ns);
     const kd_f32 surface = 1.0f - m->transmit_fraction;
     if (surface > 0.0f)
-        kd_direct_light(scene, view, m, p, ng, ns, primary.dir, occluded, direct, rays);
+        kd_direct_light(scene, view, m, hit, p, ng, ns, primary.dir, occluded, direct, rays);
     kd_f32 emitted[3] = {0.0f, 0.0f, 0.0f};
     if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS))
         kd_emitted(scene->triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE, m, primary.dir,
@@ -452,7 +462,7 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
         kd_shading_normal(scene, hit, ng, ns);
         const kd_f32 surface = 1.0f - m->transmit_fraction;
         if (surface > 0.0f)
-            kd_direct_light(scene, view, m, p, ng, ns, r.ray.dir, r.kind == 0u ? occluded : 0,
+            kd_direct_light(scene, view, m, hit, p, ng, ns, r.ray.dir, r.kind == 0u ? occluded : 0,
                             direct, rays);
         kd_f32 emitted[3] = {0.0f, 0.0f, 0.0f};
         if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS)) kd_emitted(tri, m, r.ray.dir, emitted);

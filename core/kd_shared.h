@@ -140,6 +140,7 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_EFFECT_REFRACTION 4u
 #define KDRAY_EFFECT_AMBIENT 8u      /* Ka x the render file's ambient light */
 #define KDRAY_EFFECT_AREA_LIGHTS 16u /* emissive triangles light the scene (kd_area_light.h) */
+#define KDRAY_EFFECT_TEXTURES 32u    /* map_Kd and map_Ka at the hits' vt (kd_texture.h) */
 
 /* What kd_render_pixels reads and writes besides the image and the centre hits (its `outputs`
  * argument): the primary rays' hits come traced already (by kd_trace_camera_packets), so do the
@@ -163,7 +164,10 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_MATERIAL_DIELECTRIC 2u /* Fresnel reflection + refraction, see transmit_fraction */
 #define KDRAY_MATERIAL_HIGHLIGHT 4u  /* Blinn-Phong highlight from specular and shininess */
 
-/* KdMaterial — 80 bytes.
+/* A material's texture slot that holds no texture. */
+#define KDRAY_NO_TEXTURE 0xFFFFFFFFu
+
+/* KdMaterial — 96 bytes.
  *   diffuse[3]   Kd                      shininess  Ns (Blinn-Phong exponent)
  *   specular[3]  Ks                      ior        Ni (1 when absent or not above 0)
  *   emission[3]  Ke                      transmit_fraction  share of light that meets the
@@ -171,6 +175,8 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
  *   filter[3]    colour of transmitted light (Tf where it means transmission, else 1)
  *   flags        KDRAY_MATERIAL_* bits
  *   ambient[3]   the ambient radiance it reflects: Ka x the render file's ambient (per frame)
+ *   diffuse_texture, ambient_texture  map_Kd's and map_Ka's entry of the texture table, or
+ *                KDRAY_NO_TEXTURE
  *   pad          0 */
 typedef struct KdMaterial {
     kd_f32 diffuse[3];
@@ -182,8 +188,19 @@ typedef struct KdMaterial {
     kd_f32 filter[3];
     kd_u32 flags;
     kd_f32 ambient[3];
-    kd_u32 pad;
+    kd_u32 diffuse_texture;
+    kd_u32 ambient_texture;
+    kd_u32 pad[3];
 } KdMaterial;
+
+/* KdTexture — 16 bytes: one image of the texel atlas (4 linear floats per texel, r g b and an
+ * unused fourth, rows top first). offset: its first texel; width, height in texels; pad: 0. */
+typedef struct KdTexture {
+    kd_u32 offset;
+    kd_u32 width;
+    kd_u32 height;
+    kd_u32 pad;
+} KdTexture;
 
 #define KDRAY_LIGHT_POINT 0u
 #define KDRAY_LIGHT_DIRECTIONAL 1u
@@ -248,7 +265,8 @@ typedef struct KdRayCounts {
 } KdRayCounts;
 
 #ifndef KDRAY_DEVICE_CODE
-static_assert(sizeof(KdMaterial) == 80, "KdMaterial is 80 bytes on every device");
+static_assert(sizeof(KdMaterial) == 96, "KdMaterial is 96 bytes on every device");
+static_assert(sizeof(KdTexture) == 16, "KdTexture is 16 bytes on every device");
 static_assert(sizeof(KdLight) == 32, "KdLight is 32 bytes on every device");
 static_assert(sizeof(KdView) == 112, "KdView is 112 bytes on every device");
 static_assert(sizeof(KdRayCounts) == 20, "KdRayCounts is 20 bytes on every device");

@@ -24,6 +24,7 @@
 #include "core/mtl_prepare.h"
 #include "core/obj_validate.h"
 #include "core/scene.h"
+#include "core/texture_loader.h"
 
 namespace kdray {
 namespace {
@@ -155,9 +156,9 @@ Material to_material(const tinyobj::material_t& m) {
 
 /// One warning for each MTL statement of `m` that kdray reads but does not simulate, so that a
 /// scene never renders differently from what its files ask for without a word: texture and
-/// bump maps, PBR parameters, a transmission filter on an opaque material, and every statement
-/// tinyobjloader does not know (decal, sharpness, ...). Once per material and statement, however
-/// many faces use it.
+/// bump maps (map_Kd and map_Ka are simulated: TextureLoader), PBR parameters, a transmission
+/// filter on an opaque material, and every statement tinyobjloader does not know (decal, sharpness,
+/// ...). Once per material and statement, however many faces use it.
 void warn_unsimulated(const tinyobj::material_t& m, const Material& material,
                       const std::string& file, std::vector<std::string>& warnings) {
     const auto warn = [&](const std::string& statement, const std::string& what) {
@@ -169,8 +170,6 @@ void warn_unsimulated(const tinyobj::material_t& m, const Material& material,
         const char* statement;
         const char* what;
     } maps[] = {
-        {m.diffuse_texname, "map_Kd", "Kd renders untextured"},
-        {m.ambient_texname, "map_Ka", "Ka renders untextured"},
         {m.specular_texname, "map_Ks", "Ks renders untextured"},
         {m.specular_highlight_texname, "map_Ns", "Ns renders untextured"},
         {m.bump_texname, "map_bump/bump", "the surface renders unbumped"},
@@ -279,9 +278,21 @@ Scene load_obj(const std::filesystem::path& path) {
     for (std::string& w : convert_warnings(obj.warnings, name, library_missing))
         scene.warnings.push_back(std::move(w));
 
+    // Texture files resolve relative to the MTL file's folder (that of the first library when
+    // there are several: tinyobjloader does not say which library a material came from).
+    const std::filesystem::path mtl_folder =
+        prescan.material_libraries.empty()
+            ? path.parent_path()
+            : library_path(path.parent_path(), prescan.material_libraries.front().name)
+                  .parent_path();
+    TextureLoader textures(scene, mtl_folder, name);
     for (const tinyobj::material_t& m : obj.materials) {
         scene.materials.push_back(to_material(m));
-        const Material& material = scene.materials.back();
+        Material& material = scene.materials.back();
+        if (!m.diffuse_texname.empty())
+            material.diffuse_texture = textures.load(m.name, "map_Kd", m.diffuse_texname);
+        if (!m.ambient_texname.empty())
+            material.ambient_texture = textures.load(m.name, "map_Ka", m.ambient_texname);
         warn_unsimulated(m, material, name, scene.warnings);
         // BART writes Ni 0 for opaque materials, and for some that transmit (the Robots' m49);
         // those refract with Ni 1, which bends nothing: said, not silent.
@@ -300,6 +311,10 @@ Scene load_obj(const std::filesystem::path& path) {
     // Each corner's `vn` index (-1: none), made into scene.vertex_normals once all are known.
     std::vector<int> normal_indices;
     bool any_normal = false;
+    // Each triangle's vt corners (u NaN where a corner has none), kept once any face has vt.
+    const std::vector<tinyobj::real_t>& uvs = obj.attrib.texcoords;
+    std::vector<float> texcoords;
+    bool any_texcoord = false;
     for (const tinyobj::shape_t& shape : obj.shapes) {
         const tinyobj::mesh_t& mesh = shape.mesh;
         std::size_t offset = 0;
@@ -324,6 +339,18 @@ Scene load_obj(const std::filesystem::path& path) {
                     any_normal = any_normal || index.normal_index >= 0;
                 }
                 normal_indices.insert(normal_indices.end(), corner_normal, corner_normal + 3);
+                float uv[6];
+                bool textured = true;
+                c = 0;
+                for (std::size_t corner : {std::size_t{0}, k, k + 1}) {
+                    const int t = mesh.indices[offset + corner].texcoord_index;
+                    textured = textured && t >= 0 && 2 * std::size_t(t) + 1 < uvs.size();
+                    uv[c++] = textured ? float(uvs[2 * std::size_t(t)]) : 0.0f;
+                    uv[c++] = textured ? float(uvs[2 * std::size_t(t) + 1]) : 0.0f;
+                }
+                if (!textured) uv[0] = std::nanf("");
+                any_texcoord = any_texcoord || textured;
+                texcoords.insert(texcoords.end(), uv, uv + 6);
                 scene.material_ids.push_back(id);
             }
             offset += count;
@@ -331,6 +358,7 @@ Scene load_obj(const std::filesystem::path& path) {
     }
     if (default_needed) scene.materials.push_back(Material{.name = "default"});
     if (any_normal) set_vertex_normals(scene, normal_indices, obj.attrib.normals);
+    if (any_texcoord) scene.texcoords = std::move(texcoords);
 
     if (scene.triangle_count() == 0) throw Error(name + ": the scene has no triangles");
     if (scene.triangle_count() != prescan.triangles)

@@ -11,7 +11,7 @@ namespace kdray {
 kd_u32 Effects::bits() const {
     return (shadows ? KDRAY_EFFECT_SHADOWS : 0u) | (reflection ? KDRAY_EFFECT_REFLECTION : 0u) |
            (refraction ? KDRAY_EFFECT_REFRACTION : 0u) | (ambient ? KDRAY_EFFECT_AMBIENT : 0u) |
-           (area_lights ? KDRAY_EFFECT_AREA_LIGHTS : 0u);
+           (area_lights ? KDRAY_EFFECT_AREA_LIGHTS : 0u) | (textures ? KDRAY_EFFECT_TEXTURES : 0u);
 }
 
 nlohmann::json Effects::to_json() const {
@@ -20,12 +20,14 @@ nlohmann::json Effects::to_json() const {
             {"refraction", refraction},
             {"ambient", ambient},
             {"area_lights", area_lights},
+            {"textures", textures},
             {"reasons",
              {{"shadows", shadows_reason},
               {"reflection", reflection_reason},
               {"refraction", refraction_reason},
               {"ambient", ambient_reason},
-              {"area_lights", area_lights_reason}}}};
+              {"area_lights", area_lights_reason},
+              {"textures", textures_reason}}}};
 }
 
 Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
@@ -34,11 +36,21 @@ Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
     const Material* mirror = nullptr;
     const Material* glass = nullptr;
     const Material* ambient = nullptr;
+    const Material* textured = nullptr;
     for (kd_u32 id : used) {
         const Material& m = scene.materials.at(id);
+        if (!textured && (m.diffuse_texture >= 0 || m.ambient_texture >= 0)) textured = &m;
         if (!mirror && m.is_mirror()) mirror = &m;
         if (!glass && m.transmits()) glass = &m;
         if (!ambient && m.reflects_ambient()) ambient = &m;
+    }
+    if (!textured) {
+        e.textures_reason = "no material has a texture that loaded (map_Kd, map_Ka)";
+    } else if (!scene.has_texcoords()) {
+        e.textures_reason = "no face has texture coordinates (vt)";
+    } else {
+        e.textures = true;
+        e.textures_reason = "material '" + textured->name + "' has a texture";
     }
     const Vec3& light = settings.ambient;
     if (!(light.x > 0 || light.y > 0 || light.z > 0)) {
@@ -104,6 +116,8 @@ KdMaterial to_device_material(const Material& m, const Vec3& ambient) {
         d.emission[c] = m.emission[c];
         d.filter[c] = filter[c];
     }
+    d.diffuse_texture = m.diffuse_texture >= 0 ? kd_u32(m.diffuse_texture) : KDRAY_NO_TEXTURE;
+    d.ambient_texture = m.ambient_texture >= 0 ? kd_u32(m.ambient_texture) : KDRAY_NO_TEXTURE;
     d.shininess = m.shininess;
     d.ior = m.ior > 0.0f ? m.ior : 1.0f;  // BART writes Ni 0 for opaque materials
     d.transmit_fraction = m.transmit_fraction();
