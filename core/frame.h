@@ -12,14 +12,16 @@ namespace kdray {
 /// Rays cast in a frame, by kind (64-bit: a long, many-sample frame outgrows 32 bits).
 struct RayTotals {
     std::uint64_t primary = 0, shadow = 0, reflection = 0, refraction = 0;
+    std::uint64_t area_shadow = 0;  // shadow rays toward points on emissive triangles
 
     void add(const KdRayCounts& pixel) {
         primary += pixel.primary;
         shadow += pixel.shadow;
         reflection += pixel.reflection;
         refraction += pixel.refraction;
+        area_shadow += pixel.area_shadow;
     }
-    std::uint64_t total() const { return primary + shadow + reflection + refraction; }
+    std::uint64_t total() const { return primary + shadow + reflection + refraction + area_shadow; }
 };
 
 struct FrameResult {

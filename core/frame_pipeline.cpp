@@ -51,7 +51,7 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
     const std::filesystem::path aov_path = options_.out_dir / (stem + ".aov.exr");
     const auto write_start = FrameClock::now();
     if (output == Output::Write) {
-        write_image(image_path, result.image);
+        write_image(image_path, result.image, settings_.exposure);
         try {
             if (options_.aov) write_aov(aov_path, result.hits);
         } catch (const Error&) {
@@ -96,7 +96,8 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
          {{"primary", rays.primary},
           {"shadow", rays.shadow},
           {"reflection", rays.reflection},
-          {"refraction", rays.refraction}}},
+          {"refraction", rays.refraction},
+          {"area_shadow", rays.area_shadow}}},
         {"hit_pixels", hit_pixels},
         {"mrays_per_s", trace_ms > 0 ? double(rays.total()) / (trace_ms * 1e3) : 0.0}};
     if (options_.aov) frame["aov"] = aov_path.filename().string();

@@ -79,13 +79,15 @@ void check_size(const fs::path& path, int width, int height, std::size_t values,
 
 }  // namespace
 
-void write_image(const fs::path& path, const Image& image) {
+void write_image(const fs::path& path, const Image& image, float exposure_stops) {
     check_size(path, image.width, image.height, image.rgb.size(), 3, "image");
     const std::string ext = lower_extension(path);
+    // conventions.md: every radiance that reaches an image is multiplied by 2^exposure.
+    const float scale = std::exp2(exposure_stops);
     if (ext == ".png") {
         std::vector<std::uint8_t> pixels(image.rgb.size());
         for (std::size_t i = 0; i < pixels.size(); ++i)
-            pixels[i] = std::uint8_t(std::lround(srgb_encode(image.rgb[i]) * 255.0f));
+            pixels[i] = std::uint8_t(std::lround(srgb_encode(scale * image.rgb[i]) * 255.0f));
         OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::UINT8);
         spec.attribute("oiio:ColorSpace", "sRGB");
         write_image_file(path, spec, [&](OIIO::ImageOutput& out) {
@@ -94,8 +96,14 @@ void write_image(const fs::path& path, const Image& image) {
     } else if (ext == ".exr") {
         OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
         spec.attribute("oiio:ColorSpace", "linear");
+        std::vector<float> exposed;
+        if (scale != 1.0f) {
+            exposed.resize(image.rgb.size());
+            for (std::size_t i = 0; i < exposed.size(); ++i) exposed[i] = scale * image.rgb[i];
+        }
+        const float* linear = scale != 1.0f ? exposed.data() : image.rgb.data();
         write_image_file(path, spec, [&](OIIO::ImageOutput& out) {
-            return out.write_image(OIIO::TypeDesc::FLOAT, image.rgb.data());
+            return out.write_image(OIIO::TypeDesc::FLOAT, linear);
         });
     } else {
         throw Error("cannot write " + path.string() + ": unknown image extension '" +

@@ -1,6 +1,7 @@
 // image.h — images and hit buffers, and their files through OpenImageIO: PNG (8-bit sRGB), EXR
 // (linear float), and the hit AOV of conventions.md (Z float32, prim_id uint32, optional N.XYZ).
-// Files are written to a temporary name and renamed, so an interrupted run never leaves half a file.
+// Files are written to a temporary name and renamed, so an interrupted run never leaves half a
+// file.
 #pragma once
 
 #include <filesystem>
@@ -23,8 +24,11 @@ struct HitBuffer {
     std::vector<Vec3> normals;  // optional: geometric normal facing the ray, per pixel
 };
 
-/// Writes PNG (sRGB-encoded, 8 bit) or EXR (linear half/float) by the file's extension.
-void write_image(const std::filesystem::path& path, const Image& image);
+/// Writes PNG (sRGB-encoded, 8 bit) or EXR (linear float) by the file's extension, the radiance
+/// multiplied by 2^exposure_stops (conventions.md: PNG clamp(2^e x radiance, 0, 1), EXR 2^e x
+/// radiance).
+void write_image(const std::filesystem::path& path, const Image& image,
+                 float exposure_stops = 0.0f);
 void write_aov(const std::filesystem::path& path, const HitBuffer& hits);
 HitBuffer read_aov(const std::filesystem::path& path);
 

@@ -3,13 +3,14 @@
  * between CPU and GPU. The reference image is therefore the oracle for the OpenCL image: the same
  * samples, the same rays, the same arithmetic.
  *
- * Shading is Whitted-style: emission, Lambert diffuse and a Blinn-Phong highlight under point and
- * directional lights with shadow rays, ideal mirror reflection, and dielectric reflection and
- * refraction weighted by the Fresnel equations, up to the render file's max_depth; smooth where
- * the scene has vertex normals (kd_shading_normal). Which of shadows, reflection and refraction
- * exist at all is decided per frame from its materials and lights: in a kernel by
- * -DKDRAY_COMPILED_EFFECTS (code a scene does not call for is not even compiled), on the host by
- * KdView.effects.
+ * Shading is Whitted-style: emission, ambient light by Ka, Lambert diffuse and a Blinn-Phong
+ * highlight under point and directional lights and emissive triangles (kd_area_light.h) with
+ * shadow rays, ideal mirror reflection, and
+ * dielectric reflection and refraction weighted by the Fresnel equations, up to the render file's
+ * max_depth; smooth where the scene has vertex normals (kd_shading_normal). Which of shadows,
+ * reflection, refraction, ambient light and area lights exist at all is decided per frame from its
+ * materials and lights: in a kernel by -DKDRAY_COMPILED_EFFECTS (code a scene does not call for is
+ * not even compiled), on the host by KdView.effects.
  */
 #ifndef KDRAY_KD_RENDER_H
 #define KDRAY_KD_RENDER_H
@@ -25,11 +26,13 @@
 #define KDRAY_SQRT sqrt
 #define KDRAY_EXP2 exp2
 #define KDRAY_LOG2 log2
+#define KDRAY_FLOOR floor
 #else
 #define KDRAY_EFFECT_ON(view, bit) (((view)->effects & (bit)) != 0u)
 #define KDRAY_SQRT std::sqrt
 #define KDRAY_EXP2 std::exp2
 #define KDRAY_LOG2 std::log2
+#define KDRAY_FLOOR std::floor
 #endif
 
 #define KDRAY_PI 3.14159265358979323846f
@@ -47,6 +50,13 @@ typedef struct KdSceneView {
     KDRAY_GLOBAL const kd_u32* material_ids;
     KDRAY_GLOBAL const KdMaterial* materials;
     KDRAY_GLOBAL const KdLight* lights;
+    /* The frame's emitter table (view->emitter_count entries; read with area lights only). */
+    KDRAY_GLOBAL const KdEmitter* emitters;
+    /* With textures only: each triangle's vt corners (6 floats, u NaN where it has none), the
+     * texture table and the texel atlas (kd_texture.h). */
+    KDRAY_GLOBAL const kd_f32* texcoords;
+    KDRAY_GLOBAL const KdTexture* textures;
+    KDRAY_GLOBAL const kd_f32* texels;
     kd_f32 bounds[6];
     kd_u32 intersect; /* KDRAY_INTERSECT_*: the ray-triangle test (a kernel's is compiled in) */
 } KdSceneView;
@@ -303,18 +313,51 @@ KDRAY_HOT_INLINE KdRay kd_shadow_ray(const KdView* view, const kd_f32* p, const 
     return shadow;
 }
 
+/* What m reflects toward the eye (direction `dir` of the ray that arrived) of the irradiance a
+ * light brings from direction to_light at cosine cos_l with the shading normal ns: Lambert
+ * diffuse (of colour `diffuse`, Kd textured) and the Blinn-Phong highlight, added to out. */
+KDRAY_HOT_INLINE void kd_reflected(KDRAY_GLOBAL const KdMaterial* m, const kd_f32* diffuse,
+                                   const kd_f32* ns, const kd_f32* dir, const kd_f32* to_light,
+                                   const kd_f32* irradiance, kd_f32 cos_l, kd_f32* out) {
+    kd_f32 highlight = 0.0f;
+    if (m->flags & KDRAY_MATERIAL_HIGHLIGHT) {
+        kd_f32 h[3] = {to_light[0] - dir[0], to_light[1] - dir[1], to_light[2] - dir[2]};
+        kd_normalize3(h);
+        const kd_f32 cos_h = kd_dot3(ns, h);
+        /* Normalised Blinn-Phong: (Ns + 8) / (8 pi) keeps the highlight's energy fixed. */
+        if (cos_h > 0.0f)
+            highlight =
+                (m->shininess + 8.0f) / (8.0f * KDRAY_PI) * kd_pow_positive(cos_h, m->shininess);
+    }
+    for (int c = 0; c < 3; ++c)
+        out[c] += (diffuse[c] / KDRAY_PI + m->specular[c] * highlight) * irradiance[c] * cos_l;
+}
+
+#include "core/kd_area_light.h"
+#include "core/kd_texture.h"
+
 /* Direct light at p (geometric normal ng, facing the viewer; shading normal ns) for the eye
- * direction `dir`: diffuse and highlight by ns under every light, each behind a shadow ray that
- * leaves from ng's side; with shadows off, under the headlight.
+ * direction `dir`: the ambient light it reflects (with KDRAY_EFFECT_AMBIENT), and diffuse and
+ * highlight by ns under every light, each behind a shadow ray that leaves from ng's side, and one
+ * sample of the emitters' light (with KDRAY_EFFECT_AREA_LIGHTS); with shadows off and no
+ * emitters, under the headlight.
  * occluded, when not 0, says which of the shadow rays from p are blocked (bit i for light i, as
  * kd_trace_shadow_packets traced them); else each shadow ray is traced here. */
 KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
-                                      KDRAY_GLOBAL const KdMaterial* m, const kd_f32* p,
+                                      KDRAY_GLOBAL const KdMaterial* m, KdHit hit, const kd_f32* p,
                                       const kd_f32* ng, const kd_f32* ns, const kd_f32* dir,
                                       KDRAY_GLOBAL const kd_u32* occluded, kd_f32* out,
                                       KdRayCounts* rays) {
+    kd_f32 diffuse[3], ambient[3];
+    kd_surface_colours(scene, view, m, hit, diffuse, ambient);
+    /* Ambient light, reflected by Ka (the material's ambient holds Ka x the render file's). */
+    if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AMBIENT))
+        for (int c = 0; c < 3; ++c) out[c] += ambient[c];
     const kd_u32 light_count = kd_shining_lights(view);
-    const kd_u32 lights = light_count == 0u ? 1u : light_count;
+    /* The headlight only when there are neither lights nor emitters (conventions.md). */
+    const kd_u32 lights = light_count != 0u
+                              ? light_count
+                              : (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS) ? 0u : 1u);
     for (kd_u32 i = 0; i < lights; ++i) {
         kd_f32 to_light[3], irradiance[3], distance;
         kd_light_at(scene, view, light_count, i, p, to_light, irradiance, &distance);
@@ -326,20 +369,10 @@ KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* vi
                          : kd_scene_occluded(scene, kd_shadow_ray(view, p, ng, to_light, distance)))
                 continue;
         }
-        kd_f32 highlight = 0.0f;
-        if (m->flags & KDRAY_MATERIAL_HIGHLIGHT) {
-            kd_f32 h[3] = {to_light[0] - dir[0], to_light[1] - dir[1], to_light[2] - dir[2]};
-            kd_normalize3(h);
-            const kd_f32 cos_h = kd_dot3(ns, h);
-            /* Normalised Blinn-Phong: (Ns + 8) / (8 pi) keeps the highlight's energy fixed. */
-            if (cos_h > 0.0f)
-                highlight = (m->shininess + 8.0f) / (8.0f * KDRAY_PI) *
-                            kd_pow_positive(cos_h, m->shininess);
-        }
-        for (int c = 0; c < 3; ++c)
-            out[c] +=
-                (m->diffuse[c] / KDRAY_PI + m->specular[c] * highlight) * irradiance[c] * cos_l;
+        kd_reflected(m, diffuse, ns, dir, to_light, irradiance, cos_l, out);
     }
+    if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS))
+        kd_area_light(scene, view, m, diffuse, p, ng, ns, dir, out, rays);
 }
 
 /* One sample when neither reflection nor refraction is on: the primary ray and its direct light,
@@ -371,8 +404,12 @@ KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdV
     kd_shading_normal(scene, hit, ng, ns);
     const kd_f32 surface = 1.0f - m->transmit_fraction;
     if (surface > 0.0f)
-        kd_direct_light(scene, view, m, p, ng, ns, primary.dir, occluded, direct, rays);
-    for (int c = 0; c < 3; ++c) rgb[c] = 0.0f + (m->emission[c] + surface * direct[c]);
+        kd_direct_light(scene, view, m, hit, p, ng, ns, primary.dir, occluded, direct, rays);
+    kd_f32 emitted[3] = {0.0f, 0.0f, 0.0f};
+    if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS))
+        kd_emitted(scene->triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE, m, primary.dir,
+                   emitted);
+    for (int c = 0; c < 3; ++c) rgb[c] = 0.0f + (emitted[c] + surface * direct[c]);
 }
 
 /* Traces one sample's ray tree from the primary ray and returns its colour. The primary ray's
@@ -425,9 +462,11 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
         kd_shading_normal(scene, hit, ng, ns);
         const kd_f32 surface = 1.0f - m->transmit_fraction;
         if (surface > 0.0f)
-            kd_direct_light(scene, view, m, p, ng, ns, r.ray.dir, r.kind == 0u ? occluded : 0,
+            kd_direct_light(scene, view, m, hit, p, ng, ns, r.ray.dir, r.kind == 0u ? occluded : 0,
                             direct, rays);
-        for (int c = 0; c < 3; ++c) rgb[c] += r.weight[c] * (m->emission[c] + surface * direct[c]);
+        kd_f32 emitted[3] = {0.0f, 0.0f, 0.0f};
+        if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS)) kd_emitted(tri, m, r.ray.dir, emitted);
+        for (int c = 0; c < 3; ++c) rgb[c] += r.weight[c] * (emitted[c] + surface * direct[c]);
         if (r.depth >= view->max_depth) continue;
 
         /* Secondary rays: the mirror, and the dielectric's Fresnel-weighted pair. */
@@ -506,6 +545,7 @@ KDRAY_HOT_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView*
     KdPixel out;
     kd_set3(out.rgb, 0.0f, 0.0f, 0.0f);
     out.rays.primary = out.rays.shadow = out.rays.reflection = out.rays.refraction = 0u;
+    out.rays.area_shadow = 0u;
     if (view->spp > 1u) {
         /* The AOV's centre ray: an extra primary ray. */
         const KdRay centre = kd_primary_ray(view, x, y, view->spp);

@@ -138,6 +138,9 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_EFFECT_SHADOWS 1u
 #define KDRAY_EFFECT_REFLECTION 2u
 #define KDRAY_EFFECT_REFRACTION 4u
+#define KDRAY_EFFECT_AMBIENT 8u      /* Ka x the render file's ambient light */
+#define KDRAY_EFFECT_AREA_LIGHTS 16u /* emissive triangles light the scene (kd_area_light.h) */
+#define KDRAY_EFFECT_TEXTURES 32u    /* map_Kd and map_Ka at the hits' vt (kd_texture.h) */
 
 /* What kd_render_pixels reads and writes besides the image and the centre hits (its `outputs`
  * argument): the primary rays' hits come traced already (by kd_trace_camera_packets), so do the
@@ -161,13 +164,20 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_MATERIAL_DIELECTRIC 2u /* Fresnel reflection + refraction, see transmit_fraction */
 #define KDRAY_MATERIAL_HIGHLIGHT 4u  /* Blinn-Phong highlight from specular and shininess */
 
-/* KdMaterial — 64 bytes.
+/* A material's texture slot that holds no texture. */
+#define KDRAY_NO_TEXTURE 0xFFFFFFFFu
+
+/* KdMaterial — 96 bytes.
  *   diffuse[3]   Kd                      shininess  Ns (Blinn-Phong exponent)
  *   specular[3]  Ks                      ior        Ni (1 when absent or not above 0)
  *   emission[3]  Ke                      transmit_fraction  share of light that meets the
  *                                        dielectric (1 for illum 4/6/7, 1 - d for d < 1, ...)
  *   filter[3]    colour of transmitted light (Tf where it means transmission, else 1)
- *   flags        KDRAY_MATERIAL_* bits */
+ *   flags        KDRAY_MATERIAL_* bits
+ *   ambient[3]   the ambient radiance it reflects: Ka x the render file's ambient (per frame)
+ *   diffuse_texture, ambient_texture  map_Kd's and map_Ka's entry of the texture table, or
+ *                KDRAY_NO_TEXTURE
+ *   pad          0 */
 typedef struct KdMaterial {
     kd_f32 diffuse[3];
     kd_f32 shininess;
@@ -177,7 +187,20 @@ typedef struct KdMaterial {
     kd_f32 transmit_fraction;
     kd_f32 filter[3];
     kd_u32 flags;
+    kd_f32 ambient[3];
+    kd_u32 diffuse_texture;
+    kd_u32 ambient_texture;
+    kd_u32 pad[3];
 } KdMaterial;
+
+/* KdTexture — 16 bytes: one image of the texel atlas (4 linear floats per texel, r g b and an
+ * unused fourth, rows top first). offset: its first texel; width, height in texels; pad: 0. */
+typedef struct KdTexture {
+    kd_u32 offset;
+    kd_u32 width;
+    kd_u32 height;
+    kd_u32 pad;
+} KdTexture;
 
 #define KDRAY_LIGHT_POINT 0u
 #define KDRAY_LIGHT_DIRECTIONAL 1u
@@ -192,13 +215,25 @@ typedef struct KdLight {
     kd_u32 pad;
 } KdLight;
 
+/* KdEmitter — 16 bytes: one emissive triangle of a frame's table, which the host builds in order
+ * of triangle id. triangle: its id; cdf: the probability of choosing it or one before it (the
+ * last entry's is 1); probability: of choosing it, luminance(Ke) x area / the table's total;
+ * pad: 0. */
+typedef struct KdEmitter {
+    kd_u32 triangle;
+    kd_f32 cdf;
+    kd_f32 probability;
+    kd_u32 pad;
+} KdEmitter;
+
 /* KdView — 112 bytes: the camera basis of conventions.md and the frame's render settings.
  *   origin, forward, right, up: camera position and unit basis; tan_half_fov = tan(fov_y / 2);
  *   aspect = width / height; background colour; spp samples per pixel; max_depth <=
  *   KDRAY_MAX_BOUNCES; light_count lights, which shine only with KDRAY_EFFECT_SHADOWS (without:
  *   a headlight along the view direction, no shadow rays); effects KDRAY_EFFECT_* bits; seed
  *   for the sample jitter; ray_epsilon: how far secondary rays start off the surface (scaled to
- *   the scene by the host); pad: 0. */
+ *   the scene by the host); emitter_count: entries of the emitter table (read only with
+ *   KDRAY_EFFECT_AREA_LIGHTS); pad: 0. */
 typedef struct KdView {
     kd_f32 origin[3];
     kd_f32 tan_half_fov;
@@ -215,22 +250,27 @@ typedef struct KdView {
     kd_u32 effects;
     kd_u32 seed;
     kd_f32 ray_epsilon;
-    kd_u32 pad[3];
+    kd_u32 emitter_count;
+    kd_u32 pad[2];
 } KdView;
 
-/* KdRayCounts — 16 bytes: rays cast for one pixel, by kind. */
+/* KdRayCounts — 20 bytes: rays cast for one pixel, by kind; area_shadow: shadow rays toward
+ * points on emissive triangles (shadow: toward the render file's lights). */
 typedef struct KdRayCounts {
     kd_u32 primary;
     kd_u32 shadow;
     kd_u32 reflection;
     kd_u32 refraction;
+    kd_u32 area_shadow;
 } KdRayCounts;
 
 #ifndef KDRAY_DEVICE_CODE
-static_assert(sizeof(KdMaterial) == 64, "KdMaterial is 64 bytes on every device");
+static_assert(sizeof(KdMaterial) == 96, "KdMaterial is 96 bytes on every device");
+static_assert(sizeof(KdTexture) == 16, "KdTexture is 16 bytes on every device");
 static_assert(sizeof(KdLight) == 32, "KdLight is 32 bytes on every device");
 static_assert(sizeof(KdView) == 112, "KdView is 112 bytes on every device");
-static_assert(sizeof(KdRayCounts) == 16, "KdRayCounts is 16 bytes on every device");
+static_assert(sizeof(KdRayCounts) == 20, "KdRayCounts is 20 bytes on every device");
+static_assert(sizeof(KdEmitter) == 16, "KdEmitter is 16 bytes on every device");
 #endif
 
 #endif /* KDRAY_KD_SHARED_H */

@@ -24,6 +24,7 @@
 #include "core/mtl_prepare.h"
 #include "core/obj_validate.h"
 #include "core/scene.h"
+#include "core/texture_loader.h"
 
 namespace kdray {
 namespace {
@@ -139,6 +140,7 @@ void set_vertex_normals(Scene& scene, const std::vector<int>& corner_normal,
 Material to_material(const tinyobj::material_t& m) {
     Material out;
     out.name = m.name;
+    out.ambient = vec3(m.ambient);
     out.diffuse = vec3(m.diffuse);
     out.specular = vec3(m.specular);
     out.shininess = static_cast<float>(m.shininess);
@@ -150,6 +152,56 @@ Material to_material(const tinyobj::material_t& m) {
     out.emission = vec3(m.emission);
     out.illum = m.illum;
     return out;
+}
+
+/// One warning for each MTL statement of `m` that kdray reads but does not simulate, so that a
+/// scene never renders differently from what its files ask for without a word: texture and
+/// bump maps (map_Kd and map_Ka are simulated: TextureLoader), PBR parameters, a transmission
+/// filter on an opaque material, and every statement tinyobjloader does not know (decal, sharpness,
+/// ...). Once per material and statement, however many faces use it.
+void warn_unsimulated(const tinyobj::material_t& m, const Material& material,
+                      const std::string& file, std::vector<std::string>& warnings) {
+    const auto warn = [&](const std::string& statement, const std::string& what) {
+        warnings.push_back(file + ": material '" + m.name + "': " + statement +
+                           " is not simulated (" + what + ")");
+    };
+    const struct {
+        const std::string& name;
+        const char* statement;
+        const char* what;
+    } maps[] = {
+        {m.specular_texname, "map_Ks", "Ks renders untextured"},
+        {m.specular_highlight_texname, "map_Ns", "Ns renders untextured"},
+        {m.bump_texname, "map_bump/bump", "the surface renders unbumped"},
+        {m.displacement_texname, "disp", "the surface renders undisplaced"},
+        {m.alpha_texname, "map_d", "d renders untextured"},
+        {m.reflection_texname, "refl", "no reflection map"},
+        {m.roughness_texname, "map_Pr", "PBR roughness"},
+        {m.metallic_texname, "map_Pm", "PBR metallic"},
+        {m.sheen_texname, "map_Ps", "PBR sheen"},
+        {m.emissive_texname, "map_Ke", "Ke renders untextured"},
+        {m.normal_texname, "norm", "the surface renders without its normal map"},
+    };
+    for (const auto& map : maps)
+        if (!map.name.empty()) warn(std::string(map.statement) + " '" + map.name + "'", map.what);
+    const struct {
+        tinyobj::real_t value;
+        const char* statement;
+    } pbr[] = {{m.roughness, "Pr"},
+               {m.metallic, "Pm"},
+               {m.sheen, "Ps"},
+               {m.clearcoat_thickness, "Pc"},
+               {m.clearcoat_roughness, "Pcr"},
+               {m.anisotropy, "aniso"},
+               {m.anisotropy_rotation, "anisor"}};
+    for (const auto& p : pbr)
+        if (p.value != 0) warn(p.statement, "PBR parameter");
+    // Tf 0 0 0 (absent) and 1 1 1 (the common "no filter") filter nothing on an opaque material.
+    const Vec3 tf = material.transmission;
+    if (!material.transmits() && !(tf == Vec3{0, 0, 0}) && !(tf == Vec3{1, 1, 1}))
+        warn("Tf", "the material is opaque: nothing is transmitted to filter");
+    for (const auto& [statement, value] : m.unknown_parameter)
+        warn(statement, "kdray does not read this statement");
 }
 
 bool starts_with(std::string_view s, std::string_view prefix) {
@@ -226,9 +278,22 @@ Scene load_obj(const std::filesystem::path& path) {
     for (std::string& w : convert_warnings(obj.warnings, name, library_missing))
         scene.warnings.push_back(std::move(w));
 
+    // Texture files resolve relative to the MTL file's folder (that of the first library when
+    // there are several: tinyobjloader does not say which library a material came from).
+    const std::filesystem::path mtl_folder =
+        prescan.material_libraries.empty()
+            ? path.parent_path()
+            : library_path(path.parent_path(), prescan.material_libraries.front().name)
+                  .parent_path();
+    TextureLoader textures(scene, mtl_folder, name);
     for (const tinyobj::material_t& m : obj.materials) {
         scene.materials.push_back(to_material(m));
-        const Material& material = scene.materials.back();
+        Material& material = scene.materials.back();
+        if (!m.diffuse_texname.empty())
+            material.diffuse_texture = textures.load(m.name, "map_Kd", m.diffuse_texname);
+        if (!m.ambient_texname.empty())
+            material.ambient_texture = textures.load(m.name, "map_Ka", m.ambient_texname);
+        warn_unsimulated(m, material, name, scene.warnings);
         // BART writes Ni 0 for opaque materials, and for some that transmit (the Robots' m49);
         // those refract with Ni 1, which bends nothing: said, not silent.
         if (material.transmits() && !(material.ior > 0.0f))
@@ -246,6 +311,10 @@ Scene load_obj(const std::filesystem::path& path) {
     // Each corner's `vn` index (-1: none), made into scene.vertex_normals once all are known.
     std::vector<int> normal_indices;
     bool any_normal = false;
+    // Each triangle's vt corners (u NaN where a corner has none), kept once any face has vt.
+    const std::vector<tinyobj::real_t>& uvs = obj.attrib.texcoords;
+    std::vector<float> texcoords;
+    bool any_texcoord = false;
     for (const tinyobj::shape_t& shape : obj.shapes) {
         const tinyobj::mesh_t& mesh = shape.mesh;
         std::size_t offset = 0;
@@ -270,6 +339,18 @@ Scene load_obj(const std::filesystem::path& path) {
                     any_normal = any_normal || index.normal_index >= 0;
                 }
                 normal_indices.insert(normal_indices.end(), corner_normal, corner_normal + 3);
+                float uv[6];
+                bool textured = true;
+                c = 0;
+                for (std::size_t corner : {std::size_t{0}, k, k + 1}) {
+                    const int t = mesh.indices[offset + corner].texcoord_index;
+                    textured = textured && t >= 0 && 2 * std::size_t(t) + 1 < uvs.size();
+                    uv[c++] = textured ? float(uvs[2 * std::size_t(t)]) : 0.0f;
+                    uv[c++] = textured ? float(uvs[2 * std::size_t(t) + 1]) : 0.0f;
+                }
+                if (!textured) uv[0] = std::nanf("");
+                any_texcoord = any_texcoord || textured;
+                texcoords.insert(texcoords.end(), uv, uv + 6);
                 scene.material_ids.push_back(id);
             }
             offset += count;
@@ -277,6 +358,7 @@ Scene load_obj(const std::filesystem::path& path) {
     }
     if (default_needed) scene.materials.push_back(Material{.name = "default"});
     if (any_normal) set_vertex_normals(scene, normal_indices, obj.attrib.normals);
+    if (any_texcoord) scene.texcoords = std::move(texcoords);
 
     if (scene.triangle_count() == 0) throw Error(name + ": the scene has no triangles");
     if (scene.triangle_count() != prescan.triangles)

@@ -120,6 +120,10 @@ FrameResult render_reference(const KdTree& tree, const Scene& scene, const Rende
                            scene.material_ids.data(),
                            inputs.materials.data(),
                            inputs.lights.data(),
+                           inputs.emitters.data(),
+                           inputs.effects.textures ? scene.texcoords.data() : nullptr,
+                           inputs.effects.textures ? scene.texture_table.data() : nullptr,
+                           inputs.effects.textures ? scene.texels.data() : nullptr,
                            {},
                            inputs.intersect};
     std::copy(in.bounds, in.bounds + 6, scene_view.bounds);

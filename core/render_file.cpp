@@ -32,6 +32,9 @@ using nlohmann::json;
 constexpr long long kMaxImageSize = 65536;
 constexpr long long kMaxSpp = 65536;
 constexpr long long kMaxDepth = 1024;
+/// 2^64 and 2^-64 keep every float radiance finite and above zero where it was; an exposure
+/// beyond them is a typo.
+constexpr float kMaxExposureStops = 64.0f;
 
 bool finite(const Vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
@@ -100,7 +103,9 @@ class RenderFileParser {
         if (!root.is_object()) throw Error(file_ + ": the render file must be a JSON object");
 
         RenderSettings settings;
-        check_fields(root, "", {"image", "camera", "lights", "background", "max_depth"});
+        check_fields(
+            root, "",
+            {"image", "camera", "lights", "background", "ambient", "exposure", "max_depth"});
         if (present(root, "image")) read_image(root["image"], settings);
         if (present(root, "camera")) {
             read_camera(root["camera"], settings);
@@ -111,6 +116,24 @@ class RenderFileParser {
             settings.background = vec3(root["background"], "background");
             if (settings.background.x < 0 || settings.background.y < 0 || settings.background.z < 0)
                 fail("background", "must not be negative");
+        }
+        if (present(root, "ambient")) {
+            const json& ambient = root["ambient"];
+            if (ambient.is_number()) {
+                const float grey = number(ambient, "ambient");
+                settings.ambient = {grey, grey, grey};
+            } else if (ambient.is_array()) {
+                settings.ambient = vec3(ambient, "ambient");
+            } else {
+                fail("ambient", "must be a number (a grey) or an array of 3 numbers");
+            }
+            if (settings.ambient.x < 0 || settings.ambient.y < 0 || settings.ambient.z < 0)
+                fail("ambient", "must not be negative");
+        }
+        if (present(root, "exposure")) {
+            settings.exposure = number(root["exposure"], "exposure");
+            if (!(std::fabs(settings.exposure) <= kMaxExposureStops))
+                fail("exposure", "must be between -64 and 64 stops");
         }
         if (present(root, "max_depth"))
             settings.max_depth = integer(root["max_depth"], "max_depth", 1, kMaxDepth);

@@ -1,6 +1,6 @@
 // render_file.h — the render file of conventions.md: image size and samples, a camera (fixed or
-// keyframed), lights, background and the maximum path depth. Every field has a default; an unknown
-// field or a wrong type is an Error that names the field and the file.
+// keyframed), lights, background, ambient light, exposure and the maximum path depth. Every field
+// has a default; an unknown field or a wrong type is an Error that names the field and the file.
 #pragma once
 
 #include <filesystem>
@@ -26,9 +26,9 @@ struct CameraKey {
 struct Light {
     enum class Type { point, directional };
     Type type = Type::point;
-    Vec3 position{0, 0, 0};   // point lights
+    Vec3 position{0, 0, 0};    // point lights
     Vec3 direction{0, -1, 0};  // directional lights: the direction the light travels
-    Vec3 intensity{1, 1, 1};  // point: intensity; directional: irradiance
+    Vec3 intensity{1, 1, 1};   // point: intensity; directional: irradiance
 };
 
 struct RenderSettings {
@@ -41,6 +41,10 @@ struct RenderSettings {
     bool camera_given = false;  // false: no camera in the file, frame the scene instead
     std::vector<Light> lights;
     Vec3 background{0.05f, 0.05f, 0.08f};
+    /// Ambient light: a hit adds Ka x ambient (conventions.md). A number in the file is a grey.
+    Vec3 ambient{0, 0, 0};
+    /// In stops: every radiance that reaches an image is multiplied by 2^exposure.
+    float exposure = 0.0f;
     int max_depth = 4;
 
     /// The camera for a frame number: linear interpolation between keys, the nearest key held

@@ -1,7 +1,10 @@
 // render_setup.h — turns a frame's scene, render file and camera into what the shared shading of
 // kd_render.h reads (KdView, KdMaterial, KdLight), and decides which effects the frame calls for:
 // shadow rays only with lights, reflection only when a material reflects, refraction only when
-// one transmits. The decision and its reasons go to stats.json.
+// one transmits, ambient light only when the render file has some and a material reflects it
+// (Ka > 0), area lights only when a triangle with some area emits (Ke > 0), textures only when a
+// material has map_Kd or map_Ka and the scene has vt. The decision and its
+// reasons go to stats.json.
 #pragma once
 
 #include <string>
@@ -17,8 +20,10 @@
 namespace kdray {
 
 struct Effects {
-    bool shadows = false, reflection = false, refraction = false;
-    std::string shadows_reason, reflection_reason, refraction_reason;
+    bool shadows = false, reflection = false, refraction = false, ambient = false;
+    bool area_lights = false, textures = false;
+    std::string shadows_reason, reflection_reason, refraction_reason, ambient_reason;
+    std::string area_lights_reason, textures_reason;
 
     kd_u32 bits() const;
     nlohmann::json to_json() const;
@@ -27,8 +32,14 @@ struct Effects {
 /// Looks only at the materials some triangle uses, and at the render file's lights and depth.
 Effects decide_effects(const Scene& scene, const RenderSettings& settings);
 
-KdMaterial to_device_material(const Material& material);
+/// `ambient`: the render file's ambient light, which the material reflects by its Ka.
+KdMaterial to_device_material(const Material& material, const Vec3& ambient);
 KdLight to_device_light(const Light& light);
+/// The emitter table of conventions.md's emitters: every triangle of non-zero area whose material
+/// has Ke > 0, in triangle order, chosen in proportion to luminance(Ke) x area (Rec. 709
+/// luminance). Empty when nothing emits.
+std::vector<KdEmitter> emitter_table(const Scene& scene);
+
 /// Camera basis exactly as conventions.md (and the Embree peer) computes it.
 KdView make_view(const Camera& camera, const RenderSettings& settings, const Scene& scene,
                  const Effects& effects, kd_u32 seed);
@@ -37,6 +48,8 @@ struct RenderInputs {
     KdView view;
     std::vector<KdMaterial> materials;
     std::vector<KdLight> lights;
+    /// emitter_table's, or one unread entry when nothing emits (never a zero-size buffer).
+    std::vector<KdEmitter> emitters;
     Effects effects;
     /// KDRAY_INTERSECT_*: the ray-triangle test of every trace (`kdray render --intersect`).
     kd_u32 intersect = KDRAY_INTERSECT_WATERTIGHT;

@@ -13,9 +13,10 @@
 
 namespace kdray {
 
-/// The MTL fields kdray uses (Kd, Ks, Ns, Ni, d/Tr, Tf, Ke, illum), with MTL's defaults.
+/// The MTL fields kdray uses (Ka, Kd, Ks, Ns, Ni, d/Tr, Tf, Ke, illum), with MTL's defaults.
 struct Material {
     std::string name;
+    Vec3 ambient{0, 0, 0};           // Ka: reflects the render file's ambient light
     Vec3 diffuse{0.8f, 0.8f, 0.8f};  // Kd
     Vec3 specular{0, 0, 0};          // Ks
     float shininess = 0.0f;          // Ns
@@ -24,6 +25,8 @@ struct Material {
     Vec3 transmission{0, 0, 0};      // Tf
     Vec3 emission{0, 0, 0};          // Ke
     int illum = 2;                   // MTL illumination model
+    /// map_Kd's and map_Ka's entries of Scene::texture_table, or -1 (none, or its file missing).
+    int diffuse_texture = -1, ambient_texture = -1;
 
     /// Ideal mirror reflection weighted by Ks: illum 3 or 5 with a non-zero Ks.
     bool is_mirror() const;
@@ -37,6 +40,7 @@ struct Material {
     bool transmits() const { return transmit_fraction() > 0.0f; }
     /// Spawns reflection rays: a mirror, or a dielectric's Fresnel reflection.
     bool reflects() const { return is_mirror() || transmits(); }
+    bool reflects_ambient() const { return ambient.x > 0 || ambient.y > 0 || ambient.z > 0; }
     bool emits() const { return emission.x > 0 || emission.y > 0 || emission.z > 0; }
     bool has_highlight() const {
         return (specular.x > 0 || specular.y > 0 || specular.z > 0) && shininess > 0;
@@ -55,6 +59,13 @@ struct Scene {
     /// a grey diffuse default that the loader appends only when some triangle needs it.
     std::vector<kd_u32> material_ids;
     std::vector<Material> materials;
+    /// Texture coordinates, 6 floats per triangle (u, v at v0, v1, v2) from the OBJ's `vt`; u is
+    /// NaN for a triangle without them (it renders untextured); empty when no face gives any.
+    std::vector<float> texcoords;
+    /// The images of map_Kd and map_Ka, each once: the table and the atlas of linear texels, 4
+    /// floats each (r g b, 0), rows top first (kd_texture.h reads them).
+    std::vector<KdTexture> texture_table;
+    std::vector<float> texels;
     /// Warnings met while loading (a missing MTL file, say), one line each, for stats.json.
     std::vector<std::string> warnings;
     /// Triangles of zero area: kept (they are never hit) and counted in the statistics.
@@ -73,6 +84,11 @@ struct Scene {
     /// The scene's bounds; this is the root box of every tree built over it.
     Aabb bounds() const;
     bool has_vertex_normals() const { return !vertex_normals.empty(); }
+    bool has_texcoords() const { return !texcoords.empty(); }
+    /// Bytes of the texel atlas and its table: the textures' memory on the device.
+    std::size_t texture_bytes() const {
+        return texels.size() * sizeof(float) + texture_table.size() * sizeof(KdTexture);
+    }
 };
 
 /// The cross product of a triangle's edges (v1 - v0) x (v2 - v0), in double, where the product of

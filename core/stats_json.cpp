@@ -17,6 +17,8 @@ nlohmann::json scene_json(const Scene& scene) {
             // Whether the frame shades smooth (the OBJ's vn) or flat.
             {"vertex_normals", scene.has_vertex_normals()},
             {"materials", scene.materials.size()},
+            // The texel atlas of map_Kd and map_Ka, on the device when the frame is textured.
+            {"texture_bytes", scene.texture_bytes()},
             {"warnings", scene.warnings}};
 }
 

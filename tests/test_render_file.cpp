@@ -40,6 +40,18 @@ TEST_CASE("an empty render file gives the defaults") {
     CHECK(s.camera_at(7).fov_y == 45.0f);
     CHECK(s.lights.empty());
     CHECK(s.background == Vec3{0.05f, 0.05f, 0.08f});
+    CHECK(s.ambient == Vec3{0, 0, 0});
+    CHECK(s.exposure == 0.0f);
+}
+
+TEST_CASE("ambient is RGB or a grey; exposure is in stops") {
+    const RenderSettings rgb =
+        parse_render_json(R"({"ambient": [0.1, 0.2, 0.3], "exposure": -1.5})", "r.json");
+    CHECK(rgb.ambient == Vec3{0.1f, 0.2f, 0.3f});
+    CHECK(rgb.exposure == -1.5f);
+    const RenderSettings grey = parse_render_json(R"({"ambient": 0.25, "exposure": 2})", "r.json");
+    CHECK(grey.ambient == Vec3{0.25f, 0.25f, 0.25f});
+    CHECK(grey.exposure == 2.0f);
 }
 
 TEST_CASE("the example of conventions.md reads field by field") {
@@ -51,6 +63,8 @@ TEST_CASE("the example of conventions.md reads field by field") {
         { "type": "directional", "direction": [-1, -1, -1], "irradiance": [1, 2, 3] }
       ],
       "background": [0.1, 0.2, 0.3],
+      "ambient": [0, 0, 0],
+      "exposure": 0,
       "max_depth": 7
     })",
                                                "r.json");
@@ -156,6 +170,13 @@ TEST_CASE("every error names the file and the field") {
          "field 'lights[0].intensity' must not be negative"},
         {R"({"lights": {"type": "point"}})", "field 'lights' must be an array"},
         {R"({"background": [1, 1]})", "field 'background' must be an array of 3 numbers"},
+        {R"({"ambient": [0.1, -0.1, 0]})", "field 'ambient' must not be negative"},
+        {R"({"ambient": -1})", "field 'ambient' must not be negative"},
+        {R"({"ambient": "grey"})", "field 'ambient' must be a number (a grey) or an array"},
+        {R"({"ambient": [0, 0]})", "field 'ambient' must be an array of 3 numbers"},
+        {R"({"exposure": "1"})", "field 'exposure' must be a number"},
+        {R"({"exposure": 65})", "field 'exposure' must be between -64 and 64 stops"},
+        {R"({"exposure": -1e300})", "field 'exposure' must be a finite number"},
         {R"([1, 2, 3])", "the render file must be a JSON object"},
         {R"({"image": {"width": 640,)", "invalid JSON at byte 25"},
         {"", "invalid JSON at byte 1"},

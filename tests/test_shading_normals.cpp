@@ -182,9 +182,10 @@ TEST_CASE("smooth shading follows Lambert's law at the interpolated normal") {
 TEST_CASE("a smooth mirror reflects about the interpolated normal") {
     // A mirror square in z = 0 whose normals all lean toward +x, seen from above: its mirror
     // rays lean toward +x too and find an emitting wall at x = 2 that the camera cannot see;
-    // about the flat normal they would go straight up, into the background.
-    Scene scene = make_scene({-1, -1,   0, 1, -1,   0, 1, 1, 0, -1, -1,   0, 1, 1, 0, -1, 1, 0, 2,
-                              -3, 0.5f, 2, 3, 0.5f, 2, 3, 5, 2, -3, 0.5f, 2, 3, 5, 2, -3, 5});
+    // about the flat normal they would go straight up, into the background. The wall's winding
+    // faces -x, toward the mirror: an emitter emits from its front side only (conventions.md).
+    Scene scene = make_scene({-1, -1,   0, 1, -1, 0, 1, 1,    0, -1, -1,   0, 1,  1, 0, -1, 1, 0, 2,
+                              -3, 0.5f, 2, 3, 5,  2, 3, 0.5f, 2, -3, 0.5f, 2, -3, 5, 2, 3,  5});
     const Vec3 lean = normalize(Vec3{0.3f, 0, 1});
     for (int c = 0; c < 6; ++c) put(scene.vertex_normals, lean);
     for (int c = 0; c < 6; ++c) put(scene.vertex_normals, {-1, 0, 0});

@@ -78,7 +78,9 @@ std::size_t round_up(std::size_t n, std::size_t multiple) {
 
 /// The device buffers a frame's kernels read and write.
 struct RenderBuffers {
-    cl::Buffer nodes, leaf_indices, triangles, material_ids, materials, lights, bounds;
+    cl::Buffer nodes, leaf_indices, triangles, material_ids, materials, lights, emitters, bounds;
+    /// With textures the scene's vt corners, texture table and texel atlas, else any buffers.
+    cl::Buffer texcoords, textures, texels;
     cl::Buffer rgb, hits, normals, counts, traced, occluded;
     /// The scene's vertex normals when has_vertex_normals, else any buffer (never read).
     cl::Buffer vertex_normals;
@@ -98,9 +100,9 @@ struct LaunchRows {
 void launch_pixels(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b, const KdView& view,
                    LaunchRows rows, kd_u32 outputs) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.material_ids, b.materials,
-                    b.lights, b.bounds, view, kd_u32(rows.first), kd_u32(rows.count), b.rgb, b.hits,
-                    b.normals, b.counts, b.traced, b.occluded, outputs, b.vertex_normals,
-                    b.has_vertex_normals);
+                    b.lights, b.emitters, b.texcoords, b.textures, b.texels, b.bounds, view,
+                    kd_u32(rows.first), kd_u32(rows.count), b.rgb, b.hits, b.normals, b.counts,
+                    b.traced, b.occluded, outputs, b.vertex_normals, b.has_vertex_normals);
     device.queue().enqueueNDRangeKernel(
         kernel, cl::NullRange,
         cl::NDRange(round_up(std::max<std::size_t>(1, view.width), kTileWidth),
@@ -190,8 +192,8 @@ void warm_up_opencl_render(ClDevice& device, OpenClRenderPlan& plan) {
     const KdView view{};
     with_cl_context("preparing the render kernel on " + device.info().name, [&] {
         const cl::Buffer dummy = device.allocate(sizeof(KdHit), "render kernel warm-up buffer");
-        const RenderBuffers buffers{dummy, dummy, dummy, dummy, dummy, dummy, dummy,
-                                    dummy, dummy, dummy, dummy, dummy, dummy, dummy};
+        const RenderBuffers buffers{dummy, dummy, dummy, dummy, dummy, dummy, dummy, dummy, dummy,
+                                    dummy, dummy, dummy, dummy, dummy, dummy, dummy, dummy, dummy};
         launch_rows(device, plan, buffers, view, {0, 1}, 0);
         device.queue().finish();
     });
@@ -228,6 +230,11 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
         b.has_vertex_normals ? upload(device, scene.vertex_normals, "vertex normals") : b.triangles;
     b.materials = upload(device, inputs.materials, "materials");
     b.lights = upload(device, inputs.lights, "lights");
+    b.emitters = upload(device, inputs.emitters, "emitter table");
+    const bool textured = inputs.effects.textures;
+    b.texcoords = textured ? upload(device, scene.texcoords, "texture coordinates") : b.emitters;
+    b.textures = textured ? upload(device, scene.texture_table, "texture table") : b.emitters;
+    b.texels = textured ? upload(device, scene.texels, "texel atlas") : b.emitters;
     b.bounds = upload(device, bounds, "scene bounds");
     b.rgb = device.allocate(pixels * 3 * sizeof(float), "image");
     b.hits = device.allocate(pixels * sizeof(KdHit), "hit buffer");

@@ -21,7 +21,10 @@ inline KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd
                                  __global const float* vertex_normals, kd_u32 has_vertex_normals,
                                  __global const kd_u32* material_ids,
                                  __global const KdMaterial* materials,
-                                 __global const KdLight* lights, __global const float* bounds) {
+                                 __global const KdLight* lights, __global const KdEmitter* emitters,
+                                 __global const float* texcoords,
+                                 __global const KdTexture* textures, __global const float* texels,
+                                 __global const float* bounds) {
     KdSceneView scene;
     scene.nodes = nodes;
     scene.leaf_indices = leaf_indices;
@@ -30,6 +33,10 @@ inline KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd
     scene.material_ids = material_ids;
     scene.materials = materials;
     scene.lights = lights;
+    scene.emitters = emitters;
+    scene.texcoords = texcoords;
+    scene.textures = textures;
+    scene.texels = texels;
     for (int i = 0; i < 6; ++i) scene.bounds[i] = bounds[i];
     scene.intersect = KDRAY_COMPILED_INTERSECT;
     return scene;
@@ -124,7 +131,7 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
     if (view.spp > 1u && r == view.spp) return;
     const KdView v = view;
     const KdSceneView scene = kd_scene_view(nodes, leaf_indices, triangles, vertex_normals,
-                                            has_vertex_normals, 0, 0, lights, bounds);
+                                            has_vertex_normals, 0, 0, lights, 0, 0, 0, 0, bounds);
     /* Per lane (pixel (x0 + i % 4, row0 + i / 4)): its hit's point and geometric and shading
      * normals, as kd_trace_sample computes them. */
     kd_f32 p[KDRAY_PACKET_SIZE][3], ng[KDRAY_PACKET_SIZE][3], ns[KDRAY_PACKET_SIZE][3];
@@ -199,18 +206,19 @@ KDRAY_HOT_INLINE void kd_pixel_work_item(
     __global const KdNode* nodes, __global const kd_u32* leaf_indices,
     __global const float* triangles, __global const kd_u32* material_ids,
     __global const KdMaterial* materials, __global const KdLight* lights,
-    __global const float* bounds, const KdView* view, const kd_u32 first_row, const kd_u32 rows,
-    __global float* rgb, __global KdHit* hits, __global float* normals,
-    __global KdRayCounts* ray_counts, __global const KdHit* traced, __global const kd_u32* occluded,
-    const kd_u32 outputs, __global const float* vertex_normals, const kd_u32 has_vertex_normals,
-    const int direct_only) {
+    __global const KdEmitter* emitters, __global const float* texcoords,
+    __global const KdTexture* textures, __global const float* texels, __global const float* bounds,
+    const KdView* view, const kd_u32 first_row, const kd_u32 rows, __global float* rgb,
+    __global KdHit* hits, __global float* normals, __global KdRayCounts* ray_counts,
+    __global const KdHit* traced, __global const kd_u32* occluded, const kd_u32 outputs,
+    __global const float* vertex_normals, const kd_u32 has_vertex_normals, const int direct_only) {
     const kd_u32 x = (kd_u32)get_global_id(0);
     const kd_u32 row = (kd_u32)get_global_id(1);
     if (x >= view->width || row >= rows) return;
     const kd_u32 y = first_row + row;
-    const KdSceneView scene =
-        kd_scene_view(nodes, leaf_indices, triangles, vertex_normals, has_vertex_normals,
-                      material_ids, materials, lights, bounds);
+    const KdSceneView scene = kd_scene_view(nodes, leaf_indices, triangles, vertex_normals,
+                                            has_vertex_normals, material_ids, materials, lights,
+                                            emitters, texcoords, textures, texels, bounds);
     const size_t in_launch = (size_t)row * view->width + x;
     __global const kd_u32* blocked =
         (outputs & KDRAY_RENDER_TRACED_SHADOWS) ? occluded + in_launch : 0;
@@ -218,6 +226,7 @@ KDRAY_HOT_INLINE void kd_pixel_work_item(
     if (direct_only) {
         const KdHit hit = traced[in_launch];
         pixel.rays.primary = pixel.rays.shadow = pixel.rays.reflection = pixel.rays.refraction = 0u;
+        pixel.rays.area_shadow = 0u;
         kd_trace_direct_sample(&scene, view, kd_primary_ray(view, x, y, 0u), &hit, blocked,
                                pixel.rgb, &pixel.rays, &pixel.centre_hit, pixel.normal);
     } else {
@@ -241,6 +250,8 @@ KDRAY_HOT_INLINE void kd_pixel_work_item(
 __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
                                __global const float* triangles, __global const kd_u32* material_ids,
                                __global const KdMaterial* materials, __global const KdLight* lights,
+                               __global const KdEmitter* emitters, __global const float* texcoords,
+                               __global const KdTexture* textures, __global const float* texels,
                                __global const float* bounds, const KdView view,
                                const kd_u32 first_row, const kd_u32 rows, __global float* rgb,
                                __global KdHit* hits, __global float* normals,
@@ -249,9 +260,10 @@ __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u
                                __global const float* vertex_normals,
                                const kd_u32 has_vertex_normals) {
     const KdView v = view;
-    kd_pixel_work_item(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds, &v,
-                       first_row, rows, rgb, hits, normals, ray_counts, traced, occluded, outputs,
-                       vertex_normals, has_vertex_normals, 0);
+    kd_pixel_work_item(nodes, leaf_indices, triangles, material_ids, materials, lights, emitters,
+                       texcoords, textures, texels, bounds, &v, first_row, rows, rgb, hits, normals,
+                       ray_counts, traced, occluded, outputs, vertex_normals, has_vertex_normals,
+                       0);
 }
 
 /* kd_render_pixels for spp 1 with the primary hits traced, in a kernel without reflection and
@@ -260,12 +272,15 @@ __kernel void kd_shade_traced_pixels(
     __global const KdNode* nodes, __global const kd_u32* leaf_indices,
     __global const float* triangles, __global const kd_u32* material_ids,
     __global const KdMaterial* materials, __global const KdLight* lights,
-    __global const float* bounds, const KdView view, const kd_u32 first_row, const kd_u32 rows,
-    __global float* rgb, __global KdHit* hits, __global float* normals,
-    __global KdRayCounts* ray_counts, __global const KdHit* traced, __global const kd_u32* occluded,
-    const kd_u32 outputs, __global const float* vertex_normals, const kd_u32 has_vertex_normals) {
+    __global const KdEmitter* emitters, __global const float* texcoords,
+    __global const KdTexture* textures, __global const float* texels, __global const float* bounds,
+    const KdView view, const kd_u32 first_row, const kd_u32 rows, __global float* rgb,
+    __global KdHit* hits, __global float* normals, __global KdRayCounts* ray_counts,
+    __global const KdHit* traced, __global const kd_u32* occluded, const kd_u32 outputs,
+    __global const float* vertex_normals, const kd_u32 has_vertex_normals) {
     const KdView v = view;
-    kd_pixel_work_item(nodes, leaf_indices, triangles, material_ids, materials, lights, bounds, &v,
-                       first_row, rows, rgb, hits, normals, ray_counts, traced, occluded, outputs,
-                       vertex_normals, has_vertex_normals, 1);
+    kd_pixel_work_item(nodes, leaf_indices, triangles, material_ids, materials, lights, emitters,
+                       texcoords, textures, texels, bounds, &v, first_row, rows, rgb, hits, normals,
+                       ray_counts, traced, occluded, outputs, vertex_normals, has_vertex_normals,
+                       1);
 }

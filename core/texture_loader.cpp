@@ -1,0 +1,90 @@
+#include "core/texture_loader.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <system_error>
+#include <vector>
+
+namespace kdray {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    return s;
+}
+
+/// `name` in `folder`, or the file there whose name matches it but for case (Sponza's MTL names
+/// 00_SKAP.JPG for 00_skap.JPG); empty when there is none.
+fs::path resolve(const fs::path& folder, const std::string& name) {
+    std::error_code ec;
+    const fs::path exact = folder / name;
+    if (fs::is_regular_file(exact, ec)) return exact;
+    const fs::path dir = exact.parent_path();
+    const std::string wanted = lower(exact.filename().string());
+    for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec))
+        if (lower(entry.path().filename().string()) == wanted && entry.is_regular_file(ec))
+            return entry.path();
+    return {};
+}
+
+/// The IEC 61966-2-1 decoding of an sRGB value in [0, 1].
+float srgb_decode(float encoded) {
+    return encoded <= 0.04045f ? encoded / 12.92f : std::pow((encoded + 0.055f) / 1.055f, 2.4f);
+}
+
+}  // namespace
+
+int TextureLoader::load(const std::string& material, const std::string& statement,
+                        const std::string& file) {
+    const fs::path path = resolve(folder_, file);
+    auto warn = [&](const std::string& why) {
+        scene_.warnings.push_back(where_ + ": material '" + material + "': " + statement + " '" +
+                                  file + "' " + why + "; it renders untextured");
+        return -1;
+    };
+    if (path.empty()) return warn("not found in " + folder_.string());
+    if (const auto it = loaded_.find(path); it != loaded_.end())
+        return it->second >= 0 ? it->second : warn("cannot be read");
+    auto in = OIIO::ImageInput::open(path.string());
+    if (!in) {
+        loaded_[path] = -1;
+        return warn("cannot be read (" + OIIO::geterror() + ")");
+    }
+    const OIIO::ImageSpec spec = in->spec();
+    const int channels = spec.nchannels;
+    std::vector<float> pixels(std::size_t(spec.width) * spec.height * std::max(channels, 1));
+    if (spec.width <= 0 || spec.height <= 0 || channels <= 0 ||
+        !in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data())) {
+        loaded_[path] = -1;
+        return warn("cannot be read (" + in->geterror() + ")");
+    }
+    // Integer images hold sRGB-encoded values; float images linear ones.
+    const bool srgb = !spec.format.is_floating_point();
+    KdTexture entry{};
+    entry.offset = kd_u32(scene_.texels.size() / 4);
+    entry.width = kd_u32(spec.width);
+    entry.height = kd_u32(spec.height);
+    const std::size_t texels = std::size_t(spec.width) * spec.height;
+    scene_.texels.reserve(scene_.texels.size() + 4 * texels);
+    for (std::size_t i = 0; i < texels; ++i) {
+        const float* p = &pixels[i * channels];
+        // Grey (and grey-alpha) images give every channel their first.
+        for (int c = 0; c < 3; ++c) {
+            const float v = p[channels >= 3 ? c : 0];
+            scene_.texels.push_back(srgb ? srgb_decode(v) : v);
+        }
+        scene_.texels.push_back(0.0f);
+    }
+    const int id = int(scene_.texture_table.size());
+    scene_.texture_table.push_back(entry);
+    loaded_[path] = id;
+    return id;
+}
+
+}  // namespace kdray
