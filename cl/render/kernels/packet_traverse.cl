@@ -117,7 +117,28 @@ KDRAY_HOT_INLINE void kd_packet_intersect(const KdPacket* p, __global const floa
     if (!KDRAY_PACKET_ANY(ok)) return;
     const float16 az = p->sz * a_z, bz = p->sz * b_z, cz = p->sz * c_z;
     const float16 inv_det = 1.0f / det;
-    const float16 t = kd_packet_plane_distance(p, tri, ok, (u * az + v * bz + w * cz) * inv_det);
+    const float16 t_float = (u * az + v * bz + w * cz) * inv_det;
+    /* kd_float_t_condition and its uses, operation for operation. */
+    const float16 sx = fabs(p->sx), sy = fabs(p->sy);
+    const float16 max_ax = fabs(a_x) + sx * fabs(a_z), max_ay = fabs(a_y) + sy * fabs(a_z);
+    const float16 max_bx = fabs(b_x) + sx * fabs(b_z), max_by = fabs(b_y) + sy * fabs(b_z);
+    const float16 max_cx = fabs(c_x) + sx * fabs(c_z), max_cy = fabs(c_y) + sy * fabs(c_z);
+    const float16 du =
+        max_cx * fabs(by) + fabs(cx) * max_by + max_cy * fabs(bx) + fabs(cy) * max_bx;
+    const float16 dv =
+        max_ax * fabs(cy) + fabs(ax) * max_cy + max_ay * fabs(cx) + fabs(ay) * max_cx;
+    const float16 dw =
+        max_bx * fabs(ay) + fabs(bx) * max_ay + max_by * fabs(ax) + fabs(by) * max_ax;
+    const float16 spread =
+        du * fabs(az - t_float) + dv * fabs(bz - t_float) + dw * fabs(cz - t_float);
+    const float16 scaled_z = fabs(u * az) + fabs(v * bz) + fabs(w * cz);
+    const float16 condition = (spread + scaled_z) * fabs(inv_det);
+    const float16 t_error = KDRAY_T_ERROR_PER_CONDITION * condition;
+    ok &= (t_float + t_error >= p->tmin) & (t_float - t_error < best->t);
+    if (!KDRAY_PACKET_ANY(ok)) return;
+    const int16 refine = ok & (condition > KDRAY_T_REFINE_CONDITION * fabs(t_float));
+    const float16 t =
+        KDRAY_PACKET_ANY(refine) ? kd_packet_plane_distance(p, tri, refine, t_float) : t_float;
     ok &= (t >= p->tmin) & (t < best->t);
     best->t = select(best->t, t, ok);
     best->prim = select(best->prim, (uint16)(id), as_uint16(ok));
