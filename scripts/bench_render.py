@@ -116,16 +116,22 @@ def dynamic_scenes():
     return found
 
 
+def primary_sequence(render_json, out_path):
+    """The render file with no lights and max_depth 1, its keyframed camera kept: primary rays
+    of a whole sequence in one kdray run."""
+    with open(render_json) as f:
+        j = json.load(f)
+    j["lights"] = []
+    j["max_depth"] = 1
+    with open(out_path, "w") as f:
+        json.dump(j, f)
+    return out_path
+
+
 def dynamic(kdray, peer, tmp):
     rows = []
     for name, objs, camera in dynamic_scenes():
-        with open(camera) as f:
-            j = json.load(f)
-        j["lights"] = []
-        j["max_depth"] = 1
-        render = os.path.join(tmp, "dynamic.json")
-        with open(render, "w") as f:
-            json.dump(j, f)
+        render = primary_sequence(camera, os.path.join(tmp, "dynamic.json"))
         # ROUNDS rounds, each of one kdray run of the sequence and the peer's build and trace of
         # every frame (the median of PEER_REPEAT in its process), so that both sides meet the
         # machine's slower and faster minutes alike; a frame's figure is its median over rounds.

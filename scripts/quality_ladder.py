@@ -28,7 +28,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_common import ROOT, SHARED, build_peer, machine_description, median, run_json  # noqa
-from bench_render import primary_only  # noqa
+from bench_render import primary_only, primary_sequence  # noqa
 from accuracy_plots import _pyplot, ensure_matplotlib  # noqa
 
 QUALITIES = ("low", "medium", "high")
@@ -72,13 +72,7 @@ def mean_over_frames(runs, value):
 def dynamic(kdray, peer, rounds, tmp):
     rows = []
     for name, objs, camera in animations():
-        with open(camera) as f:
-            j = json.load(f)
-        j["lights"] = []
-        j["max_depth"] = 1
-        render = os.path.join(tmp, "dynamic.json")
-        with open(render, "w") as f:
-            json.dump(j, f)
+        render = primary_sequence(camera, os.path.join(tmp, "dynamic.json"))
         peer_cams = [primary_only(camera, os.path.join(tmp, f"peer_{k}.json"), frame=k)
                      for k in range(len(objs))]
         kd = {q: [] for q in QUALITIES}

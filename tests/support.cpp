@@ -34,9 +34,14 @@ Scene random_triangles(int count, std::uint32_t seed, float extent, float size, 
     return make_scene(std::move(tris), "random");
 }
 
-Scene long_slivers(int count, std::uint32_t seed) {
+namespace {
+
+/// `count` thin triangles in random directions, centred in [0, box)^3: a long edge of
+/// 2 half_length and a third corner `width` off its middle.
+Scene random_slivers(int count, std::uint32_t seed, float box, float half_length, float width,
+                     const char* name) {
     std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> pos(0.0f, 1.0f);
+    std::uniform_real_distribution<float> pos(0.0f, box);
     std::normal_distribution<float> normal;
     auto direction = [&] {
         const Vec3 d{normal(rng), normal(rng), normal(rng)};
@@ -45,28 +50,21 @@ Scene long_slivers(int count, std::uint32_t seed) {
     std::vector<float> tris;
     for (int i = 0; i < count; ++i) {
         const Vec3 c{pos(rng), pos(rng), pos(rng)}, along = direction(), across = direction();
-        push_triangle(tris, c - along * 0.5f, c + along * 0.5f, c + across * 0.02f);
+        push_triangle(tris, c - along * half_length, c + along * half_length, c + across * width);
     }
-    return make_scene(std::move(tris), "long_slivers");
+    return make_scene(std::move(tris), name);
+}
+
+}  // namespace
+
+Scene long_slivers(int count, std::uint32_t seed) {
+    return random_slivers(count, seed, 1.0f, 0.5f, 0.02f, "long_slivers");
 }
 
 Scene needles(int count, std::uint32_t seed) {
-    // 1e4 long, 1e-3 wide, in random directions through a 10-unit box: the triangles whose
-    // distances the watertight test's own t got wrong (kd_plane_distance) and that every large
-    // node's split clips.
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> pos(0.0f, 10.0f);
-    std::normal_distribution<float> normal;
-    auto direction = [&] {
-        const Vec3 d{normal(rng), normal(rng), normal(rng)};
-        return d * (1.0f / length(d));
-    };
-    std::vector<float> tris;
-    for (int i = 0; i < count; ++i) {
-        const Vec3 c{pos(rng), pos(rng), pos(rng)}, along = direction(), across = direction();
-        push_triangle(tris, c - along * 5000.0f, c + along * 5000.0f, c + across * 1e-3f);
-    }
-    return make_scene(std::move(tris), "needles");
+    // 1e4 long, 1e-3 wide, through a 10-unit box: the triangles whose distances the watertight
+    // test's own t got wrong (kd_plane_distance) and that every large node's split clips.
+    return random_slivers(count, seed, 10.0f, 5000.0f, 1e-3f, "needles");
 }
 
 Scene planar_triangles(int count, std::uint32_t seed) {
