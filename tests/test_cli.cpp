@@ -446,15 +446,15 @@ TEST_CASE("Ctrl-C (or a closed terminal's SIGHUP) mid-run leaves complete images
             write_obj(dir / "in" / ("f_" + std::to_string(f) + ".obj"), scene);
         fs::path out = dir / "out";
         // The signal once the first image exists (polled, so a slow machine does not matter).
-        std::string script = "'" + std::string(KDRAY_BINARY) + "' render '" +
-                             (dir / "in").string() + "'/f_*.obj -o '" + out.string() +
-                             "' --builder reference --tracer reference -q 2>/dev/null & pid=$!; "
-                             "while ! ls '" +
-                             out.string() +
-                             "'/*.png >/dev/null 2>&1 && "
-                             "kill -0 $pid 2>/dev/null; do sleep 0.02; done; "
-                             "kill -" +
-                             std::string(signal) + " $pid 2>/dev/null; wait $pid; exit $?";
+        // Built with a stream: GCC 12's -Wrestrict misreads a chain of string operator+ here.
+        std::ostringstream script_text;
+        script_text << "'" << KDRAY_BINARY << "' render '" << (dir / "in").string()
+                    << "'/f_*.obj -o '" << out.string()
+                    << "' --builder reference --tracer reference -q 2>/dev/null & pid=$!; "
+                    << "while ! ls '" << out.string() << "'/*.png >/dev/null 2>&1 && "
+                    << "kill -0 $pid 2>/dev/null; do sleep 0.02; done; "
+                    << "kill -" << signal << " $pid 2>/dev/null; wait $pid; exit $?";
+        const std::string script = script_text.str();
         // std::system runs the script with sh -c itself: wrapping it in another "sh -c \"...\""
         // let the outer shell expand $! and $pid to nothing, so no signal was ever sent.
         int status = std::system(script.c_str());
