@@ -103,8 +103,6 @@ extern "C" void on_interrupt(int signal) {
     std::signal(signal, SIG_DFL);
 }
 
-}  // namespace
-
 /// The command line's overrides of the render file (--spp, --size, --ray-depth) applied to
 /// `settings`; returns what each set, for stats.json.
 nlohmann::json apply_overrides(const RenderCommand& command, RenderSettings& settings) {
@@ -124,6 +122,8 @@ nlohmann::json apply_overrides(const RenderCommand& command, RenderSettings& set
     }
     return used;
 }
+
+}  // namespace
 
 int run_render(const RenderCommand& command) {
     const auto setup_start = FrameClock::now();
