@@ -194,7 +194,9 @@ TEST_CASE("--quality: the ladder's parameters, each command's default, options s
                                  (dir / "in" / "frame_2.obj").string(), "-o", out.string(),
                                  "--camera", render.string(), "--tracer", "reference", "-q"});
     REQUIRE_MESSAGE(r.status == 0, r.err);
-    for (const nlohmann::json& frame : read_json(out / "stats.json")["frames"])
+    // Held in a variable: a range-for over read_json(...)["frames"] walks a destroyed temporary.
+    const nlohmann::json animation = read_json(out / "stats.json");
+    for (const nlohmann::json& frame : animation["frames"])
         CHECK(frame["tree"]["quality"] == build_quality_name(kAnimationBuildQuality));
     r = run_kdray({"render", obj.string(), "-o", (dir / "one").string(), "--camera",
                    render.string(), "--tracer", "reference", "-q"});
