@@ -63,7 +63,7 @@ inline float16 kd_packet_pick(int16 k, __global const float* c) {
 /* kd_plane_distance for the lanes in `lanes`, lane by lane through the scalar function, so that a
  * packet's distances are the single ray's bit for bit; `fallback` elsewhere. Only lanes whose ray
  * passes inside the triangle with a poorly conditioned float t get here (kd_float_t_condition),
- * which is rare: the loop costs nothing when it does not run. */
+ * which is rare on ordinary meshes. */
 inline float16 kd_packet_plane_distance(const KdPacket* p, __global const float* tri, int16 lanes,
                                         float16 fallback) {
     float t[16], o[3][16], d[3][16];
