@@ -141,7 +141,7 @@ int run_render(const RenderCommand& command) {
     // Every frame's camera, interpolated between valid keys, must have a basis too: checked
     // before the first frame costs time.
     if (settings.camera_given)
-        for (const std::size_t i : selected) settings.camera_at(int(i));
+        for (const std::size_t i : selected) settings.check_camera_at(int(i));
     // A frame larger than the host's memory is refused with the figures, before it starts.
     const FrameMemory frame_memory =
         estimate_frame_memory(settings.width, settings.height, command.aov);

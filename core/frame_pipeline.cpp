@@ -24,9 +24,12 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
                                            const std::function<void()>& computed) {
     if (!job.scene) throw Error(job.input + ": render_frame without a scene");
     const Scene& scene = *job.scene;
-    // Choose the camera: the render file's at this frame, else the first completed frame's view.
-    if (written_ == 0) framed_ = frame_bounds(scene.bounds());
-    const Camera camera = settings_.camera_given ? settings_.camera_at(int(job.number)) : framed_;
+    // Choose the camera: the render file's at this frame, else the first completed frame's view,
+    // kept in the scene's units: each frame of an animation has a frame of its own.
+    if (!settings_.camera_given && written_ == 0)
+        settings_.camera_keys = {
+            CameraKey{0, in_scene_units(frame_bounds(scene.bounds()), scene.frame)}};
+    const Camera camera = settings_.camera_at(int(job.number), scene.frame);
 
     // Prepare, build, then trace: the programs that the builder and the tracer for these effects
     // need are built (in the first frame; compile_ms) outside build_ms and trace_ms.
@@ -41,8 +44,11 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
         options_.compile_ms_so_far ? options_.compile_ms_so_far() - compiled_before : 0;
     BuiltTree built = builder_.build(scene);
     const auto trace_start = FrameClock::now();
-    const FrameResult result = tracer_.trace(built, scene, inputs);
+    FrameResult result = tracer_.trace(built, scene, inputs);
     const double trace_ms = ms_since(trace_start);
+    // The AOV's distances in the scene's units.
+    if (!scene.frame.is_identity())
+        for (KdHit& hit : result.hits.hits) hit.t = scene.frame.scene_length(hit.t);
     if (computed) computed();
 
     // Write the image and the AOV, each whole or not at all.

@@ -80,7 +80,6 @@ class FramePipeline {
     RenderSettings settings_;
     FrameOptions options_;
     std::size_t written_ = 0;  // frames completed with Output::Write
-    Camera framed_;
 };
 
 }  // namespace kdray

@@ -16,29 +16,90 @@ struct Vec3 {
     constexpr float& operator[](int axis) { return axis == 0 ? x : axis == 1 ? y : z; }
 };
 
-constexpr Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-constexpr Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-constexpr Vec3 operator-(Vec3 a) { return {-a.x, -a.y, -a.z}; }
-constexpr Vec3 operator*(Vec3 a, float s) { return {a.x * s, a.y * s, a.z * s}; }
-constexpr Vec3 operator*(float s, Vec3 a) { return a * s; }
-constexpr Vec3 operator*(Vec3 a, Vec3 b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
-constexpr Vec3 operator/(Vec3 a, float s) { return {a.x / s, a.y / s, a.z / s}; }
-constexpr bool operator==(Vec3 a, Vec3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+constexpr Vec3 operator+(Vec3 a, Vec3 b) {
+    return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+constexpr Vec3 operator-(Vec3 a, Vec3 b) {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+constexpr Vec3 operator-(Vec3 a) {
+    return {-a.x, -a.y, -a.z};
+}
+constexpr Vec3 operator*(Vec3 a, float s) {
+    return {a.x * s, a.y * s, a.z * s};
+}
+constexpr Vec3 operator*(float s, Vec3 a) {
+    return a * s;
+}
+constexpr Vec3 operator*(Vec3 a, Vec3 b) {
+    return {a.x * b.x, a.y * b.y, a.z * b.z};
+}
+constexpr Vec3 operator/(Vec3 a, float s) {
+    return {a.x / s, a.y / s, a.z / s};
+}
+constexpr bool operator==(Vec3 a, Vec3 b) {
+    return a.x == b.x && a.y == b.y && a.z == b.z;
+}
 
-constexpr float dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+constexpr float dot(Vec3 a, Vec3 b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 constexpr Vec3 cross(Vec3 a, Vec3 b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-inline float length(Vec3 a) { return std::sqrt(dot(a, a)); }
-inline Vec3 normalize(Vec3 a) { return a / length(a); }
+inline float length(Vec3 a) {
+    return std::sqrt(dot(a, a));
+}
+inline Vec3 normalize(Vec3 a) {
+    return a / length(a);
+}
 constexpr Vec3 min(Vec3 a, Vec3 b) {
     return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
 }
 constexpr Vec3 max(Vec3 a, Vec3 b) {
     return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
 }
-constexpr Vec3 lerp(Vec3 a, Vec3 b, float t) { return a + (b - a) * t; }
+constexpr Vec3 lerp(Vec3 a, Vec3 b, float t) {
+    return a + (b - a) * t;
+}
 inline bool is_finite(Vec3 a) {
+    return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
+}
+
+/// A point or vector in double: the scene's own coordinates (OBJ vertices, the render file's
+/// camera and lights) before SceneFrame maps them into the float frame that kdray traces in.
+struct DVec3 {
+    double x = 0, y = 0, z = 0;
+
+    constexpr DVec3() = default;
+    constexpr DVec3(double x_, double y_, double z_) : x(x_), y(y_), z(z_) {}
+    constexpr DVec3(Vec3 v) : x(v.x), y(v.y), z(v.z) {}  // exact: every float is a double
+    constexpr double operator[](int axis) const { return axis == 0 ? x : axis == 1 ? y : z; }
+    constexpr double& operator[](int axis) { return axis == 0 ? x : axis == 1 ? y : z; }
+};
+
+constexpr DVec3 operator+(DVec3 a, DVec3 b) {
+    return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+constexpr DVec3 operator-(DVec3 a, DVec3 b) {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+constexpr DVec3 operator*(DVec3 a, double s) {
+    return {a.x * s, a.y * s, a.z * s};
+}
+constexpr bool operator==(DVec3 a, DVec3 b) {
+    return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+constexpr double dot(DVec3 a, DVec3 b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+constexpr DVec3 cross(DVec3 a, DVec3 b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline double length(DVec3 a) {
+    return std::sqrt(dot(a, a));
+}
+inline bool is_finite(DVec3 a) {
     return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
 

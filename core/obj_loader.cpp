@@ -13,6 +13,7 @@
 #include <cstring>
 #include <fstream>
 #include <istream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -134,6 +135,26 @@ void set_vertex_normals(Scene& scene, const std::vector<int>& corner_normal,
             // A zero-area triangle has no normal either; it is never hit.
             if (!unit(geometric, out)) std::fill(out, out + 3, 0.0f);
         }
+    }
+}
+
+/// scene.frame fitted to the bounds of the triangles' corners (in double, the file's own
+/// coordinates), and scene.triangles: each corner's position in that frame, rounded to float once.
+void place_in_frame(Scene& scene, const std::vector<std::size_t>& corner_vertices,
+                    const std::vector<double>& positions) {
+    const double inf = std::numeric_limits<double>::infinity();
+    DVec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+    for (const std::size_t v : corner_vertices)
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], positions[3 * v + a]);
+            hi[a] = std::max(hi[a], positions[3 * v + a]);
+        }
+    scene.frame = SceneFrame::fit(lo, hi, scene.path.string());
+    scene.triangles.resize(corner_vertices.size() * 3);
+    for (std::size_t c = 0; c < corner_vertices.size(); ++c) {
+        const double* p = &positions[3 * corner_vertices[c]];
+        const Vec3 f = scene.frame.point({p[0], p[1], p[2]});
+        for (int a = 0; a < 3; ++a) scene.triangles[3 * c + a] = f[a];
     }
 }
 
@@ -304,9 +325,15 @@ Scene load_obj(const std::filesystem::path& path) {
     const auto default_material = static_cast<kd_u32>(scene.materials.size());
     bool default_needed = false;
 
-    // Triangles, numbered shape by shape and face by face in tinyobjloader's order.
-    const std::vector<tinyobj::real_t>& vertices = obj.attrib.vertices;
-    scene.triangles.reserve(prescan.triangles * KDRAY_FLOATS_PER_TRIANGLE);
+    // Triangles, numbered shape by shape and face by face in tinyobjloader's order; each
+    // corner's vertex is the pre-scan's double position of the same `v` line.
+    if (obj.attrib.vertices.size() != prescan.positions.size())
+        throw Error(name + ": tinyobjloader read " +
+                    std::to_string(obj.attrib.vertices.size() / 3) +
+                    " vertices where kdray's pre-scan read " +
+                    std::to_string(prescan.positions.size() / 3));
+    std::vector<std::size_t> corner_vertices;
+    corner_vertices.reserve(prescan.triangles * 3);
     scene.material_ids.reserve(prescan.triangles);
     // Each corner's `vn` index (-1: none), made into scene.vertex_normals once all are known.
     std::vector<int> normal_indices;
@@ -332,9 +359,7 @@ Scene load_obj(const std::filesystem::path& path) {
                 int c = 0;
                 for (std::size_t corner : {std::size_t{0}, k, k + 1}) {
                     const tinyobj::index_t& index = mesh.indices[offset + corner];
-                    const auto v = static_cast<std::size_t>(index.vertex_index);
-                    for (int axis = 0; axis < 3; ++axis)
-                        scene.triangles.push_back(static_cast<float>(vertices[3 * v + axis]));
+                    corner_vertices.push_back(static_cast<std::size_t>(index.vertex_index));
                     corner_normal[c++] = index.normal_index;
                     any_normal = any_normal || index.normal_index >= 0;
                 }
@@ -357,10 +382,11 @@ Scene load_obj(const std::filesystem::path& path) {
         }
     }
     if (default_needed) scene.materials.push_back(Material{.name = "default"});
+    if (corner_vertices.empty()) throw Error(name + ": the scene has no triangles");
+    place_in_frame(scene, corner_vertices, prescan.positions);
     if (any_normal) set_vertex_normals(scene, normal_indices, obj.attrib.normals);
     if (any_texcoord) scene.texcoords = std::move(texcoords);
 
-    if (scene.triangle_count() == 0) throw Error(name + ": the scene has no triangles");
     if (scene.triangle_count() != prescan.triangles)
         scene.warnings.push_back(
             name + ": tinyobjloader made " + std::to_string(scene.triangle_count()) +

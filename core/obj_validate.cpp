@@ -168,11 +168,16 @@ class ObjScanner {
 
     void scan_vertex(const char* p, const char* e) {
         int count = 0;
-        for (std::string_view token; !(token = next_token(p, e)).empty(); ++count)
-            check_number(token, "vertex coordinate");
+        double xyz[3];
+        for (std::string_view token; !(token = next_token(p, e)).empty(); ++count) {
+            double value = 0;
+            check_number(token, "vertex coordinate", &value);
+            if (count < 3) xyz[count] = value;
+        }
         if (count != 3 && count != 4 && count != 6)
             fail("vertex has " + std::to_string(count) +
                  " numbers; expected 'x y z', 'x y z w' or 'x y z r g b'");
+        result_.positions.insert(result_.positions.end(), xyz, xyz + 3);
         ++result_.vertices;
     }
 
@@ -188,9 +193,9 @@ class ObjScanner {
     }
 
     /// A number of a `v` or `vn` line (`what` names it in the error): finite as a 32-bit float,
-    /// as tinyobjloader reads it.
-    void check_number(std::string_view token, const char* what) const {
-        if (const char* problem = obj_number_problem(token))
+    /// as tinyobjloader reads it; its value in `value` when given.
+    void check_number(std::string_view token, const char* what, double* value = nullptr) const {
+        if (const char* problem = obj_number_problem(token, value))
             fail(std::string(what) + " '" + printable(token) + "' " + problem);
     }
 

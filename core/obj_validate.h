@@ -28,6 +28,10 @@ struct ObjPrescan {
     std::size_t faces = 0;      // `f` lines
     /// Triangles after fan triangulation of every face (a quad gives 2, an n-gon n - 2).
     std::size_t triangles = 0;
+    /// x y z of every `v` line in double, exactly as the file writes them (correctly rounded):
+    /// the scene's own coordinates, before SceneFrame rounds them to float in its frame.
+    /// tinyobjloader's float vertices are only for its triangulation.
+    std::vector<double> positions;
     std::vector<MtlReference> material_libraries;
 };
 

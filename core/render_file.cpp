@@ -47,38 +47,80 @@ bool normalizable(const Vec3& v) {
     return finite(v) && squared > 0.0f && std::isfinite(squared);
 }
 
+/// The same in double, where the render file's vectors are read.
+bool normalizable(const DVec3& v) {
+    const double squared = dot(v, v);
+    return is_finite(v) && squared > 0.0 && std::isfinite(squared);
+}
+
 /// What is wrong with a camera's basis, if anything: the field to blame and the problem.
 struct CameraProblem {
     const char* field;
     std::string what;
 };
 
-/// The basis of conventions.md's camera model must exist: a view direction and an up vector that
-/// is not along it, in 32-bit floats. Checked for every key of a render file and for every
+/// The basis of conventions.md's camera model must exist in the scene's units: a view direction
+/// and an up vector that is not along it. Checked for every key of a render file and for every
 /// frame's interpolated camera, which two valid keys can still make degenerate.
-std::optional<CameraProblem> camera_basis_problem(const Camera& camera) {
-    const Vec3 view = camera.look_at - camera.position;
-    if (view == Vec3{0, 0, 0})
+std::optional<CameraProblem> camera_basis_problem(const SceneCamera& camera) {
+    const DVec3 view = camera.look_at - camera.position;
+    if (view == DVec3{0, 0, 0})
         return CameraProblem{"look_at", "must differ from the camera position"};
-    // Finite coordinates can still give no basis in float: look_at - position may overflow
-    // (-3e38 to 3e38), and a vector whose squared length overflows or underflows normalises
-    // to NaN or 0. Every such camera rendered an image of NaN rays without a word.
     if (!normalizable(view))
-        return CameraProblem{"look_at",
-                             "is too far from or too close to the camera position: look_at - "
-                             "position cannot be normalised in 32-bit floats"};
-    if (camera.up == Vec3{0, 0, 0}) return CameraProblem{"up", "must not be the zero vector"};
-    if (!normalizable(camera.up))
-        return CameraProblem{"up", "is too long or too short to be normalised in 32-bit floats"};
+        return CameraProblem{"look_at", "is too close to the camera position to give a direction"};
+    if (camera.up == DVec3{0, 0, 0}) return CameraProblem{"up", "must not be the zero vector"};
+    if (!normalizable(camera.up)) return CameraProblem{"up", "is too short to give a direction"};
     // `!(... >= ...)` so that a NaN can never pass.
-    if (!(length(cross(normalize(view), normalize(camera.up))) >= 1e-6f))
+    if (!(length(cross(view, camera.up)) >= 1e-6 * length(view) * length(camera.up)))
         return CameraProblem{"up", "is parallel to the view direction (look_at - position)"};
-    // The basis exactly as the camera computes it (camera.cpp), which must be finite.
+    return std::nullopt;
+}
+
+}  // namespace
+
+Camera in_frame(const SceneCamera& camera, const SceneFrame& frame) {
+    Camera out;
+    out.position = frame.point(camera.position);
+    out.look_at = frame.point(camera.look_at);
+    out.up = {float(camera.up.x), float(camera.up.y), float(camera.up.z)};
+    if (!normalizable(out.up)) {
+        const double l = length(camera.up);
+        out.up = {float(camera.up.x / l), float(camera.up.y / l), float(camera.up.z / l)};
+    }
+    out.fov_y = camera.fov_y;
+    return out;
+}
+
+SceneCamera in_scene_units(const Camera& camera, const SceneFrame& frame) {
+    SceneCamera out;
+    out.position = frame.scene_point(camera.position);
+    out.look_at = frame.scene_point(camera.look_at);
+    out.up = camera.up;
+    out.fov_y = camera.fov_y;
+    return out;
+}
+
+namespace {
+
+/// The basis of the camera that is traced, in the scene's frame and in 32-bit floats, exactly as
+/// camera.cpp computes it. A camera with a basis in the scene's units can still lack one here:
+/// a position 1e-30 scene extents from look_at, or 1e39 away from the scene.
+std::optional<CameraProblem> traced_basis_problem(const Camera& camera) {
+    if (!finite(camera.position))
+        return CameraProblem{"position", "is too far from the scene to trace in 32-bit floats"};
+    if (!finite(camera.look_at))
+        return CameraProblem{"look_at", "is too far from the scene to trace in 32-bit floats"};
+    if (!normalizable(camera.look_at - camera.position))
+        return CameraProblem{"look_at",
+                             "is too far from or too close to the camera position for the scene's "
+                             "size: look_at - position cannot be normalised in 32-bit floats"};
+    if (!(length(cross(normalize(camera.look_at - camera.position), normalize(camera.up))) >=
+          1e-6f))
+        return CameraProblem{"up", "is parallel to the view direction (look_at - position)"};
     const CameraRays rays(camera, 1, 1);
     if (!finite(rays.forward) || !finite(rays.right) || !finite(rays.up))
         return CameraProblem{"up",
-                             "gives no camera basis in 32-bit floats with this view direction; "
-                             "scale up and look_at - position to ordinary lengths"};
+                             "gives no camera basis in 32-bit floats with this view direction"};
     return std::nullopt;
 }
 
@@ -167,12 +209,18 @@ class RenderFileParser {
         if (!value.is_object()) fail(path, "must be an object");
     }
 
-    float number(const json& value, const std::string& path) const {
+    /// A number as the file writes it, in double; finite as a float too unless `any_double`
+    /// (a point light's intensity, which the scene's frame scales by its scale squared).
+    double real(const json& value, const std::string& path, bool any_double = false) const {
         if (!value.is_number()) fail(path, "must be a number");
         const double d = value.get<double>();
-        if (!std::isfinite(d) || std::fabs(d) > std::numeric_limits<float>::max())
+        if (!std::isfinite(d) || (!any_double && std::fabs(d) > std::numeric_limits<float>::max()))
             fail(path, "must be a finite number");
-        return static_cast<float>(d);
+        return d;
+    }
+
+    float number(const json& value, const std::string& path) const {
+        return static_cast<float>(real(value, path));
     }
 
     int integer(const json& value, const std::string& path, long long lo, long long hi) const {
@@ -190,10 +238,15 @@ class RenderFileParser {
         return static_cast<int>(v);
     }
 
-    Vec3 vec3(const json& value, const std::string& path) const {
+    DVec3 dvec3(const json& value, const std::string& path, bool any_double = false) const {
         if (!value.is_array() || value.size() != 3) fail(path, "must be an array of 3 numbers");
-        return {number(value[0], path + "[0]"), number(value[1], path + "[1]"),
-                number(value[2], path + "[2]")};
+        return {real(value[0], path + "[0]", any_double), real(value[1], path + "[1]", any_double),
+                real(value[2], path + "[2]", any_double)};
+    }
+
+    Vec3 vec3(const json& value, const std::string& path) const {
+        const DVec3 v = dvec3(value, path);
+        return {float(v.x), float(v.y), float(v.z)};
     }
 
     void read_image(const json& image, RenderSettings& settings) const {
@@ -206,11 +259,11 @@ class RenderFileParser {
         if (present(image, "spp")) settings.spp = integer(image["spp"], "image.spp", 1, kMaxSpp);
     }
 
-    Camera read_camera_fields(const json& c, const std::string& path) const {
-        Camera camera;
-        if (present(c, "position")) camera.position = vec3(c["position"], join(path, "position"));
-        if (present(c, "look_at")) camera.look_at = vec3(c["look_at"], join(path, "look_at"));
-        if (present(c, "up")) camera.up = vec3(c["up"], join(path, "up"));
+    SceneCamera read_camera_fields(const json& c, const std::string& path) const {
+        SceneCamera camera;
+        if (present(c, "position")) camera.position = dvec3(c["position"], join(path, "position"));
+        if (present(c, "look_at")) camera.look_at = dvec3(c["look_at"], join(path, "look_at"));
+        if (present(c, "up")) camera.up = dvec3(c["up"], join(path, "up"));
         if (present(c, "fov_y")) {
             camera.fov_y = number(c["fov_y"], join(path, "fov_y"));
             if (!(camera.fov_y > 0.0f && camera.fov_y < 180.0f))
@@ -282,21 +335,20 @@ class RenderFileParser {
             if (light.type == Light::Type::point) {
                 check_fields(l, path, {"type", "position", "intensity"});
                 if (present(l, "position"))
-                    light.position = vec3(l["position"], path + ".position");
+                    light.position = dvec3(l["position"], path + ".position");
                 if (present(l, "intensity"))
-                    light.intensity = vec3(l["intensity"], path + ".intensity");
+                    light.intensity = dvec3(l["intensity"], path + ".intensity", true);
             } else {
                 check_fields(l, path, {"type", "direction", "irradiance"});
                 if (present(l, "direction"))
-                    light.direction = vec3(l["direction"], path + ".direction");
-                if (light.direction == Vec3{0, 0, 0})
+                    light.direction = dvec3(l["direction"], path + ".direction");
+                if (light.direction == DVec3{0, 0, 0})
                     fail(path + ".direction", "must not be the zero vector");
-                // [1e30, 0, 0] has a squared length of inf and normalised to [0, 0, 0].
+                // Normalised in double (render_setup.cpp); 1e-200 has no square even there.
                 if (!normalizable(light.direction))
-                    fail(path + ".direction",
-                         "is too long or too short to be normalised in 32-bit floats");
+                    fail(path + ".direction", "is too short to give a direction");
                 if (present(l, "irradiance"))
-                    light.intensity = vec3(l["irradiance"], path + ".irradiance");
+                    light.intensity = dvec3(l["irradiance"], path + ".irradiance");
             }
             if (light.intensity.x < 0 || light.intensity.y < 0 || light.intensity.z < 0)
                 fail(path + (light.type == Light::Type::point ? ".intensity" : ".irradiance"),
@@ -310,27 +362,69 @@ class RenderFileParser {
 
 }  // namespace
 
-Camera RenderSettings::camera_at(int frame) const {
-    if (camera_keys.empty()) return Camera{};
-    // Before the first key and after the last, the nearest key holds.
-    if (frame <= camera_keys.front().frame) return camera_keys.front().camera;
-    if (frame >= camera_keys.back().frame) return camera_keys.back().camera;
+namespace {
+
+/// The keys around `frame`, and how far between them it lies; a and b are the same key before
+/// the first key, after the last and for a fixed camera.
+struct KeyPair {
+    const CameraKey *a, *b;
+};
+
+KeyPair keys_around(const std::vector<CameraKey>& keys, int frame) {
+    if (frame <= keys.front().frame) return {&keys.front(), &keys.front()};
+    if (frame >= keys.back().frame) return {&keys.back(), &keys.back()};
     // The first key after `frame`; the one before it is at or before `frame`.
-    const auto next = std::upper_bound(camera_keys.begin(), camera_keys.end(), frame,
+    const auto next = std::upper_bound(keys.begin(), keys.end(), frame,
                                        [](int f, const CameraKey& key) { return f < key.frame; });
-    const CameraKey& b = *next;
-    const CameraKey& a = *(next - 1);
-    const float t = static_cast<float>(frame - a.frame) / static_cast<float>(b.frame - a.frame);
-    Camera c;
-    c.position = lerp(a.camera.position, b.camera.position, t);
-    c.look_at = lerp(a.camera.look_at, b.camera.look_at, t);
-    c.up = lerp(a.camera.up, b.camera.up, t);
-    c.fov_y = a.camera.fov_y + (b.camera.fov_y - a.camera.fov_y) * t;
-    if (const auto problem = camera_basis_problem(c))
-        throw Error(path.string() + ": the camera of frame " + std::to_string(frame) +
-                    ", between the keys of frames " + std::to_string(a.frame) + " and " +
-                    std::to_string(b.frame) + ": its " + problem->field + " " + problem->what);
+    return {&*(next - 1), &*next};
+}
+
+std::string camera_of_frame(const std::filesystem::path& path, int frame, const KeyPair& keys) {
+    std::string where = path.string() + ": the camera of frame " + std::to_string(frame);
+    if (keys.a != keys.b)
+        where += ", between the keys of frames " + std::to_string(keys.a->frame) + " and " +
+                 std::to_string(keys.b->frame);
+    return where;
+}
+
+}  // namespace
+
+Camera RenderSettings::camera_at(int frame, const SceneFrame& scene_frame) const {
+    if (camera_keys.empty()) return in_frame(SceneCamera{}, scene_frame);
+    const KeyPair keys = keys_around(camera_keys, frame);
+    const Camera a = in_frame(keys.a->camera, scene_frame);
+    Camera c = a;
+    if (keys.a != keys.b) {
+        // Interpolated in the frame, in float: a scene near the origin is only scaled by a power
+        // of two there, so its frames' cameras are those of the unscaled scene, bit for bit.
+        const Camera b = in_frame(keys.b->camera, scene_frame);
+        const float t = static_cast<float>(frame - keys.a->frame) /
+                        static_cast<float>(keys.b->frame - keys.a->frame);
+        c.position = lerp(a.position, b.position, t);
+        c.look_at = lerp(a.look_at, b.look_at, t);
+        c.up = lerp(a.up, b.up, t);
+        c.fov_y = a.fov_y + (b.fov_y - a.fov_y) * t;
+    }
+    if (const auto problem = traced_basis_problem(c))
+        throw Error(camera_of_frame(path, frame, keys) + ": its " + problem->field + " " +
+                    problem->what);
     return c;
+}
+
+void RenderSettings::check_camera_at(int frame) const {
+    if (camera_keys.empty()) return;
+    const KeyPair keys = keys_around(camera_keys, frame);
+    if (keys.a == keys.b) return;  // a key, checked when the file was read
+    const double t = double(frame - keys.a->frame) / double(keys.b->frame - keys.a->frame);
+    const SceneCamera& a = keys.a->camera;
+    const SceneCamera& b = keys.b->camera;
+    SceneCamera c;
+    c.position = a.position + (b.position - a.position) * t;
+    c.look_at = a.look_at + (b.look_at - a.look_at) * t;
+    c.up = a.up + (b.up - a.up) * t;
+    if (const auto problem = camera_basis_problem(c))
+        throw Error(camera_of_frame(path, frame, keys) + ": its " + problem->field + " " +
+                    problem->what);
 }
 
 RenderSettings parse_render_json(const std::string& text, const std::filesystem::path& name) {

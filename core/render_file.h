@@ -8,9 +8,12 @@
 #include <vector>
 
 #include "core/math.h"
+#include "core/scene_frame.h"
 
 namespace kdray {
 
+/// The camera kdray traces with: in the scene's frame (scene_frame.h), in float, as conventions.md
+/// defines the model.
 struct Camera {
     Vec3 position{0, 0, 1};
     Vec3 look_at{0, 0, 0};
@@ -18,17 +21,36 @@ struct Camera {
     float fov_y = 45.0f;  // full vertical field of view, degrees
 };
 
+/// A camera of the render file: in the scene's own units, in double.
+struct SceneCamera {
+    DVec3 position{0, 0, 1};
+    DVec3 look_at{0, 0, 0};
+    DVec3 up{0, 1, 0};
+    float fov_y = 45.0f;
+
+    SceneCamera() = default;
+    SceneCamera(const Camera& c)
+        : position(c.position), look_at(c.look_at), up(c.up), fov_y(c.fov_y) {}
+};
+
+/// A render file's camera in the scene's frame: its points mapped there, its up vector as the
+/// file gives it (or made unit length in double first when it has no square in float).
+Camera in_frame(const SceneCamera& camera, const SceneFrame& frame);
+/// A traced camera back in the scene's units.
+SceneCamera in_scene_units(const Camera& camera, const SceneFrame& frame);
+
 struct CameraKey {
     int frame = 0;
-    Camera camera;
+    SceneCamera camera;
 };
 
 struct Light {
     enum class Type { point, directional };
     Type type = Type::point;
-    Vec3 position{0, 0, 0};    // point lights
-    Vec3 direction{0, -1, 0};  // directional lights: the direction the light travels
-    Vec3 intensity{1, 1, 1};   // point: intensity; directional: irradiance
+    DVec3 position{0, 0, 0};    // point lights, in the scene's units
+    DVec3 direction{0, -1, 0};  // directional lights: the direction the light travels
+    /// Point: intensity, any finite double (the frame scales it); directional: irradiance.
+    DVec3 intensity{1, 1, 1};
 };
 
 struct RenderSettings {
@@ -47,9 +69,15 @@ struct RenderSettings {
     float exposure = 0.0f;
     int max_depth = 4;
 
-    /// The camera for a frame number: linear interpolation between keys, the nearest key held
-    /// before the first and after the last.
-    Camera camera_at(int frame) const;
+    /// The camera for a frame number in `scene_frame`: the keys mapped into the frame, then
+    /// interpolated linearly in float, the nearest key held before the first and after the last.
+    /// Throws Error naming the render file and the frame when the camera has no basis in float
+    /// there (a look_at 1e-30 scene extents from the position, say).
+    Camera camera_at(int frame, const SceneFrame& scene_frame = {}) const;
+    /// Throws Error naming the render file and the frame when the camera of a frame, interpolated
+    /// in the scene's units (double), has no basis there: keys valid alone may give one that
+    /// looks at its own position or along its up vector.
+    void check_camera_at(int frame) const;
 };
 
 RenderSettings load_render_file(const std::filesystem::path& path);

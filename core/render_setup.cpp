@@ -159,13 +159,32 @@ std::vector<KdEmitter> emitter_table(const Scene& scene) {
     return table;
 }
 
-KdLight to_device_light(const Light& light) {
+KdLight to_device_light(const Light& light, const SceneFrame& frame) {
     KdLight d{};
-    Vec3 v = light.type == Light::Type::point ? light.position : normalize(light.direction);
-    d.type = light.type == Light::Type::point ? KDRAY_LIGHT_POINT : KDRAY_LIGHT_DIRECTIONAL;
+    Vec3 v;
+    double power_scale = 1.0;
+    if (light.type == Light::Type::point) {
+        d.type = KDRAY_LIGHT_POINT;
+        v = frame.point(light.position);
+        // Intensity / distance^2 at a hit: the frame's distances are the scene's times scale.
+        power_scale = frame.scale * frame.scale;
+    } else {
+        d.type = KDRAY_LIGHT_DIRECTIONAL;
+        // In float as before where it can be (a scene's image stays bit for bit what it was);
+        // in double where the float has no square ([1e30, 0, 0]).
+        const Vec3 f{float(light.direction.x), float(light.direction.y), float(light.direction.z)};
+        const float squared = dot(f, f);
+        if (squared > 0.0f && std::isfinite(squared)) {
+            v = normalize(f);
+        } else {
+            const double l = length(light.direction);
+            v = {float(light.direction.x / l), float(light.direction.y / l),
+                 float(light.direction.z / l)};
+        }
+    }
     for (int c = 0; c < 3; ++c) {
         d.vec[c] = v[c];
-        d.power[c] = light.intensity[c];
+        d.power[c] = float(light.intensity[c] * power_scale);
     }
     return d;
 }
@@ -198,7 +217,7 @@ RenderInputs prepare_render(const Scene& scene, const RenderSettings& settings,
     in.view = make_view(camera, settings, scene, in.effects, seed);
     for (const Material& m : scene.materials)
         in.materials.push_back(to_device_material(m, settings.ambient));
-    for (const Light& l : settings.lights) in.lights.push_back(to_device_light(l));
+    for (const Light& l : settings.lights) in.lights.push_back(to_device_light(l, scene.frame));
     if (in.effects.area_lights) in.emitters = emitter_table(scene);
     in.view.emitter_count = kd_u32(in.emitters.size());
     if (in.emitters.empty()) in.emitters.push_back(KdEmitter{});

@@ -34,7 +34,9 @@ Effects decide_effects(const Scene& scene, const RenderSettings& settings);
 
 /// `ambient`: the render file's ambient light, which the material reflects by its Ka.
 KdMaterial to_device_material(const Material& material, const Vec3& ambient);
-KdLight to_device_light(const Light& light);
+/// The light in the scene's frame: a point light's position mapped there and its intensity
+/// scaled by the frame's scale squared, so that intensity / distance^2 is the scene's.
+KdLight to_device_light(const Light& light, const SceneFrame& frame);
 /// The emitter table of conventions.md's emitters: every triangle of non-zero area whose material
 /// has Ke > 0, in triangle order, chosen in proportion to luminance(Ke) x area (Rec. 709
 /// luminance). Empty when nothing emits.

@@ -10,6 +10,7 @@
 
 #include "core/kd_shared.h"
 #include "core/math.h"
+#include "core/scene_frame.h"
 
 namespace kdray {
 
@@ -49,7 +50,10 @@ struct Material {
 
 struct Scene {
     std::filesystem::path path;
-    /// KDRAY_FLOATS_PER_TRIANGLE floats per triangle: v0.xyz v1.xyz v2.xyz.
+    /// Where the triangles lie: load_obj fits a frame to the file's coordinates (scene_frame.h);
+    /// a scene made in memory (make_scene) is traced as given, in the identity frame.
+    SceneFrame frame;
+    /// KDRAY_FLOATS_PER_TRIANGLE floats per triangle, in `frame`: v0.xyz v1.xyz v2.xyz.
     std::vector<float> triangles;
     /// Shading normals, KDRAY_FLOATS_PER_TRIANGLE floats per triangle (unit normals at v0, v1,
     /// v2), from the OBJ's `vn`; empty when no face gives any, and the shading is then flat (the
@@ -75,6 +79,10 @@ struct Scene {
     Vec3 vertex(std::size_t triangle, int corner) const {
         const float* p = &triangles[triangle * KDRAY_FLOATS_PER_TRIANGLE + 3 * corner];
         return {p[0], p[1], p[2]};
+    }
+    /// A corner in the scene's own units (the file's coordinates, as rounded in the frame).
+    DVec3 scene_vertex(std::size_t triangle, int corner) const {
+        return frame.scene_point(vertex(triangle, corner));
     }
     Aabb triangle_bounds(std::size_t triangle) const {
         Aabb b;

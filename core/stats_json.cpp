@@ -19,6 +19,10 @@ nlohmann::json scene_json(const Scene& scene) {
             {"materials", scene.materials.size()},
             // The texel atlas of map_Kd and map_Ka, on the device when the frame is textured.
             {"texture_bytes", scene.texture_bytes()},
+            // Where kdray traced it: frame = (scene - offset) * scale (scene_frame.h).
+            {"frame",
+             {{"offset", {scene.frame.offset.x, scene.frame.offset.y, scene.frame.offset.z}},
+              {"scale", scene.frame.scale}}},
             {"warnings", scene.warnings}};
 }
 

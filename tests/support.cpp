@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <random>
@@ -116,6 +117,37 @@ Scene with_zero_area(int count, std::uint32_t seed) {
         push_triangle(tris, p, q, p + (q - p) * 0.5f);  // a segment
     }
     return make_scene(std::move(tris), "zero_area");
+}
+
+std::string spheres_obj(double scale, double offset) {
+    const struct {
+        double x, y, z, r;
+    } spheres[] = {{0, 0, 0, 1.0}, {2.2, 0.3, -0.5, 0.8}, {-1.8, -0.4, 0.6, 0.6}};
+    constexpr int rings = 24, segments = 48;
+    std::string obj = "# three spheres, scale " + std::to_string(scale) + "\n";
+    char line[160];
+    int base = 1;
+    for (const auto& s : spheres) {
+        for (int i = 0; i <= rings; ++i)
+            for (int j = 0; j < segments; ++j) {
+                const double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
+                const double p[3] = {s.x + s.r * std::sin(theta) * std::cos(phi),
+                                     s.y + s.r * std::cos(theta),
+                                     s.z + s.r * std::sin(theta) * std::sin(phi)};
+                std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", p[0] * scale + offset,
+                              p[1] * scale + offset, p[2] * scale + offset);
+                obj += line;
+            }
+        for (int i = 0; i < rings; ++i)
+            for (int j = 0; j < segments; ++j) {
+                const int a = base + i * segments + j, b = base + i * segments + (j + 1) % segments;
+                std::snprintf(line, sizeof line, "f %d %d %d\nf %d %d %d\n", a, a + segments, b, b,
+                              a + segments, b + segments);
+                obj += line;
+            }
+        base += (rings + 1) * segments;
+    }
+    return obj;
 }
 
 std::vector<NamedScene> hard_scenes() {

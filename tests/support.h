@@ -34,6 +34,12 @@ Scene coincident_triangles(int count);
 /// referenced by the tree but must never be hit.
 Scene with_zero_area(int count, std::uint32_t seed);
 
+/// OBJ text of three UV spheres (radii 1, 0.8, 0.6; 24 x 48 quads each, flat shaded) near the
+/// origin, every coordinate multiplied by `scale` and moved by `offset` on each axis, in double
+/// (17 digits): a scene that floats read on load would ruin far from the origin (spacing 1.0 at
+/// 1e7) or at extreme scales (products of three coordinates overflow at 1e15).
+std::string spheres_obj(double scale, double offset);
+
 /// The hard scenes above by name, with the far (offset 1e5) and tiny (extent 1e-4) random scenes.
 struct NamedScene {
     std::string name;

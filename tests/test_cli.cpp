@@ -298,7 +298,7 @@ TEST_CASE("kdray render writes images, AOVs that agree with brute force, and sta
     HitBuffer aov = read_aov(out / "frame_2.aov.exr");
     RenderSettings settings = load_render_file(render);
     Scene loaded = load_obj(dir / "in" / "frame_2.obj");
-    RenderInputs inputs = prepare_render(loaded, settings, settings.camera_at(0), 0);
+    RenderInputs inputs = prepare_render(loaded, settings, settings.camera_at(0, loaded.frame), 0);
     REQUIRE(aov.width == 48);
     REQUIRE(aov.height == 32);
     int mismatches = 0, hits = 0;
@@ -306,6 +306,7 @@ TEST_CASE("kdray render writes images, AOVs that agree with brute force, and sta
         for (int x = 0; x < aov.width; ++x) {
             KdRay ray = kd_camera_ray(&inputs.view, float(x) + 0.5f, float(y) + 0.5f);
             KdHit expected = brute_force_closest(loaded, ray);
+            expected.t = loaded.frame.scene_length(expected.t);  // the AOV's Z: scene units
             hits += expected.prim != KDRAY_NO_HIT;
             mismatches += !hits_agree(aov.hits[std::size_t(y) * aov.width + x], expected);
         }

@@ -64,9 +64,9 @@ TEST_CASE("triangles are numbered shape by shape, face by face") {
                                     "o second\nf 2 3 4\n");
     const Scene scene = load_obj(path);
     REQUIRE(scene.triangle_count() == 3);
-    CHECK(scene.vertex(0, 2) == Vec3{0, 1, 0});
-    CHECK(scene.vertex(1, 2) == Vec3{0, 0, 1});
-    CHECK(scene.vertex(2, 0) == Vec3{1, 0, 0});
+    CHECK(scene.scene_vertex(0, 2) == DVec3{0, 1, 0});
+    CHECK(scene.scene_vertex(1, 2) == DVec3{0, 0, 1});
+    CHECK(scene.scene_vertex(2, 0) == DVec3{1, 0, 0});
     CHECK(scene.path == path);
     CHECK(scene.warnings.empty());
 }
@@ -82,14 +82,14 @@ TEST_CASE("quads and polygons are triangulated as tinyobjloader does") {
                                     "f 1 2 3 4\nf 5 6 7 8\nf 9 10 11 12 13\n");
     const Scene scene = load_obj(path);
     REQUIRE(scene.triangle_count() == 7);
-    CHECK(scene.vertex(0, 0) == Vec3{0, 0, 0});
-    CHECK(scene.vertex(0, 2) == Vec3{2, 1, 0});
-    CHECK(scene.vertex(1, 1) == Vec3{2, 1, 0});
-    CHECK(scene.vertex(1, 2) == Vec3{0, 1, 0});
-    CHECK(scene.vertex(2, 2) == Vec3{0, 1, 1});
-    CHECK(scene.vertex(3, 0) == Vec3{1, 0, 1});
-    CHECK(scene.vertex(3, 1) == Vec3{3, 1, 1});
-    for (std::size_t t = 4; t < 7; ++t) CHECK(scene.vertex(t, 0).z == 2.0f);
+    CHECK(scene.scene_vertex(0, 0) == DVec3{0, 0, 0});
+    CHECK(scene.scene_vertex(0, 2) == DVec3{2, 1, 0});
+    CHECK(scene.scene_vertex(1, 1) == DVec3{2, 1, 0});
+    CHECK(scene.scene_vertex(1, 2) == DVec3{0, 1, 0});
+    CHECK(scene.scene_vertex(2, 2) == DVec3{0, 1, 1});
+    CHECK(scene.scene_vertex(3, 0) == DVec3{1, 0, 1});
+    CHECK(scene.scene_vertex(3, 1) == DVec3{3, 1, 1});
+    for (std::size_t t = 4; t < 7; ++t) CHECK(scene.scene_vertex(t, 0).z == 2.0);
 }
 
 TEST_CASE("negative indices, tabs, CRLF line ends and comments") {
@@ -100,9 +100,9 @@ TEST_CASE("negative indices, tabs, CRLF line ends and comments") {
                                     "f -3 -2 -1\r\nv 0 0 5\r\nf -4 -1 -2\r\n");
     const Scene scene = load_obj(path);
     REQUIRE(scene.triangle_count() == 2);
-    CHECK(scene.vertex(0, 0) == Vec3{0, 0, 0});
-    CHECK(scene.vertex(1, 1) == Vec3{0, 0, 5});
-    CHECK(scene.vertex(1, 2) == Vec3{0, 1, 0});
+    CHECK(scene.scene_vertex(0, 0) == DVec3{0, 0, 0});
+    CHECK(scene.scene_vertex(1, 1) == DVec3{0, 0, 5});
+    CHECK(scene.scene_vertex(1, 2) == DVec3{0, 1, 0});
 }
 
 TEST_CASE("v/vt/vn face forms and vertex colours load") {
@@ -403,8 +403,9 @@ TEST_CASE("the shared scenes load with SOURCES.md's triangle counts") {
     for (const Material& m : cornell.materials)
         light |= m.name == "light" && m.emission == Vec3{17, 12, 4};
     CHECK(light);
-    CHECK(cornell.bounds().lo.x == -1.02f);
-    CHECK(cornell.bounds().hi.y == 1.99f);
+    // In the scene's units; the frame only scales this scene near the origin, which is exact.
+    CHECK(cornell.frame.scene_point(cornell.bounds().lo).x == double(-1.02f));
+    CHECK(cornell.frame.scene_point(cornell.bounds().hi).y == double(1.99f));
 
     // Sponza's MTL sets both d 1 and Tr 0: d wins, every material is opaque.
     const Scene sponza = load_obj(scenes / "sponza-dabrovic/sponza.obj");

@@ -97,7 +97,8 @@ TEST_CASE("opencl render: the glass room matches the reference image and its ray
     settings.width = 160;
     settings.height = 120;
     const KdTree tree = build_reference(scene);
-    const RenderInputs inputs = prepare_render(scene, settings, settings.camera_at(0), 0);
+    const RenderInputs inputs =
+        prepare_render(scene, settings, settings.camera_at(0, scene.frame), 0);
     REQUIRE(inputs.effects.shadows);
     REQUIRE(inputs.effects.reflection);
     REQUIRE(inputs.effects.refraction);

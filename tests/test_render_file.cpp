@@ -3,6 +3,7 @@
 // the file and the field's path.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 
@@ -187,44 +188,59 @@ TEST_CASE("every error names the file and the field") {
     }
 }
 
-TEST_CASE("cameras and lights with finite numbers but no basis in float are errors") {
-    // Each of these used to be accepted and rendered an image of NaN (or zero-direction) rays
-    // without a word: every coordinate is a finite float, but the vectors the camera model
-    // normalises are not normalisable in 32-bit floats.
-    struct Case {
-        const char* why;
-        const char* text;
-        const char* message;  // after "scene/render.json: "
+TEST_CASE("cameras are read in double; the traced camera must have a basis in the scene's frame") {
+    // The render file's numbers are the scene's units, read in double, where each of these has a
+    // basis. What is traced is the camera in the scene's frame (scene_frame.h), in float: there
+    // a view 1e-30 long is fine for a scene 1e-30 across and has no direction for a unit scene.
+    const auto settings = [](const std::string& text) {
+        return parse_render_json(text, "scene/render.json");
     };
-    const Case cases[] = {
-        {"look_at - position overflows to inf",
-         R"({"camera": {"position": [-3e38, 0, 0], "look_at": [3e38, 0, 0]}})",
-         "field 'camera.look_at' is too far from or too close to the camera position"},
-        {"the view vector's squared length underflows to 0, so 1/length is inf",
-         R"({"camera": {"position": [0, 0, 1e-30], "look_at": [0, 0, 0]}})",
-         "field 'camera.look_at' is too far from or too close to the camera position"},
-        {"the same in a keyframe, whose path names the key",
-         R"({"camera": [{"frame": 0}, {"frame": 5, "position": [0, 0, 1e-30], "look_at": [0, 0, 0]}]})",
-         "field 'camera[1].look_at' is too far from or too close"},
-        {"up's squared length overflows: normalised to 0, it looked parallel to everything",
-         R"({"camera": {"up": [0, 1e30, 0]}})",
-         "field 'camera.up' is too long or too short to be normalised"},
-        {"up's squared length underflows: the old test called it the zero vector",
-         R"({"camera": {"up": [0, 1e-30, 0]}})",
-         "field 'camera.up' is too long or too short to be normalised"},
-        {"a directional light's [1e30, 0, 0] normalised to [0, 0, 0]",
-         R"({"lights": [{"type": "directional", "direction": [1e30, 0, 0]}]})",
-         "field 'lights[0].direction' is too long or too short to be normalised"},
-    };
-    for (const Case& c : cases) {
-        CAPTURE(c.why);
-        CHECK(parse_error(c.text).find(std::string("scene/render.json: ") + c.message) == 0);
+    const SceneFrame unit;  // a scene of about unit extent at the origin
+    SceneFrame tiny;        // a scene about 1e-30 across
+    tiny.scale = std::ldexp(1.0, 100);
+    const std::string tiny_view =
+        R"({"camera": {"position": [0, 0, 1e-30], "look_at": [0, 0, 0]}})";
+    CHECK(parse_error(tiny_view).empty());
+    CHECK_THROWS_WITH_AS(
+        settings(tiny_view).camera_at(0, unit),
+        doctest::Contains("scene/render.json: the camera of frame 0: its look_at is "
+                          "too far from or too close to the camera position"),
+        Error);
+    const Camera traced = settings(tiny_view).camera_at(0, tiny);
+    CHECK(traced.position.z == float(1e-30 * std::ldexp(1.0, 100)));
+    CHECK_THROWS_WITH_AS(
+        settings(R"({"camera": {"position": [-3e38, 0, 0], "look_at": [3e38, 0, 0]}})")
+            .camera_at(0, unit),
+        doctest::Contains("its look_at is too far from or too close to the camera position"),
+        Error);
+    // In a keyframe, the frame and its keys are named.
+    CHECK_THROWS_WITH_AS(
+        settings(
+            R"({"camera": [{"frame": 0}, {"frame": 4, "position": [0, 0, 1e-30], "look_at": [0, 0, 0]}]})")
+            .camera_at(5, unit),
+        doctest::Contains("the camera of frame 5: its look_at"), Error);
+
+    // Up is a direction: any length that has a square in double will do, in any frame.
+    for (const char* up : {"[0, 1e30, 0]", "[0, 1e-30, 0]"}) {
+        CAPTURE(up);
+        const std::string text = std::string(R"({"camera": {"up": )") + up + "}}";
+        REQUIRE(parse_error(text).empty());
+        const Camera c = settings(text).camera_at(0, unit);
+        CHECK(c.up.y > 0.0f);
+        CHECK(std::isfinite(c.up.y));
     }
-    // Large and small, but normalisable: still accepted.
+    // So is a directional light's direction (render_setup normalises it in double).
     CHECK(
-        parse_error(
-            R"({"camera": {"position": [0, 0, 1e18], "look_at": [0, 0, 0], "up": [0, 1e-18, 0]}})")
-            .empty());
+        parse_error(R"({"lights": [{"type": "directional", "direction": [1e30, 0, 0]}]})").empty());
+    CHECK(parse_error(R"({"lights": [{"type": "directional", "direction": [1e-200, 0, 0]}]})")
+              .find("field 'lights[0].direction' is too short to give a direction") !=
+          std::string::npos);
+    // A point light's intensity may be any finite double: the frame scales it by scale^2.
+    CHECK(parse_error(R"({"lights": [{"position": [0, 0, 0], "intensity": [1e-60, 1e60, 1]}]})")
+              .empty());
+    // What has no basis in double is an error as the file is read.
+    CHECK(parse_error(R"({"camera": {"up": [0, 0, 1]}})").find("field 'camera.up' is parallel") !=
+          std::string::npos);
 }
 
 TEST_CASE("load_render_file reads files and names the missing one") {

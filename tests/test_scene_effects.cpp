@@ -467,7 +467,8 @@ TEST_CASE("textures: a head-on quad shows its 2x2 checker at the texel centres, 
     camera.position = {0, 0, 2};
     camera.look_at = {0, 0, 0};
     camera.fov_y = float(2 * std::atan(0.5) * 180 / std::numbers::pi);
-    const RenderInputs inputs = prepare_render(scene, settings, camera, 0);
+    // The camera in the scene's units; the loaded quad lies in its frame (scene_frame.h).
+    const RenderInputs inputs = prepare_render(scene, settings, in_frame(camera, scene.frame), 0);
     REQUIRE(inputs.effects.textures);
     // The pixels, rows top first, are the image's texels: the top row is v = 0.75, red and green.
     for (const bool device : {false, true}) {
@@ -484,7 +485,8 @@ TEST_CASE("textures: a head-on quad shows its 2x2 checker at the texel centres, 
     // Without vt the same material renders untextured: Kd / pi.
     Scene plain = scene;
     plain.texcoords.clear();
-    const RenderInputs untextured = prepare_render(plain, settings, camera, 0);
+    const RenderInputs untextured =
+        prepare_render(plain, settings, in_frame(camera, plain.frame), 0);
     CHECK_FALSE(untextured.effects.textures);
     const FrameResult frame = render_reference(tree, plain, untextured, 1);
     for (float v : frame.image.rgb) CHECK(v * std::numbers::pi == doctest::Approx(1.0));
@@ -507,7 +509,7 @@ TEST_CASE("textures: map_Ka multiplies Ka x ambient") {
     Camera camera;
     camera.position = {0.5f, -0.5f, 2};
     camera.look_at = {0.5f, -0.5f, 0};
-    const RenderInputs inputs = prepare_render(scene, settings, camera, 0);
+    const RenderInputs inputs = prepare_render(scene, settings, in_frame(camera, scene.frame), 0);
     REQUIRE(inputs.effects.textures);
     const FrameResult frame = render_reference(tree, scene, inputs, 1);
     const int bytes[3] = {51, 102, 204};
