@@ -30,6 +30,9 @@ import time
 
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_common import git_commit  # noqa: E402
+
 SIZES = [10_000, 100_000, 1_000_000, 3_000_000, 10_000_000]
 SEED = 20080601  # any fixed number: the scenes must not change between runs
 DIGITS = 6  # coordinates as 0.dddddd: 1e-6 of the cube, far below the triangle size at 10M
@@ -234,7 +237,8 @@ def main():
             rows.append(row)
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "scale.json"), "w") as f:
-        json.dump({"machine": info, "rows": rows}, f, indent=2)
+        json.dump({"commit": git_commit(), "command": " ".join(["scripts/scale.py", *sys.argv[1:]]),
+                   "machine": info, "rows": rows}, f, indent=2)
     write_markdown(os.path.join(args.out, "scale.md"), rows, info)
     if any(r["status"] == "ok" for r in rows):
         write_plot(os.path.join(args.out, "scale.png"), rows)
