@@ -168,6 +168,12 @@ def write_markdown(path, rows, info):
         lines += ["", f"The largest scene that built, {big['triangles']:,} triangles, peaked at "
                   f"{big['peak_rss_bytes'] / 2**30:.1f} GiB of host memory of the machine's "
                   f"{info['memory_gib']:.1f} GiB."]
+    lines += ["", "At the largest sizes the small stage's split-candidate masks (128 bytes per small-root",
+              "reference) outgrow the largest allocation PoCL reports on this VM, so the small stage runs in",
+              "batches of roots whose masks and first node records fit one allocation each (masks live for one",
+              "batch, the last batch's to the end of the build, for the device's BufferPool; records until the",
+              "output stage). Scenes that fit are one batch; the batches' tree is the one-batch tree",
+              "(tests/test_opencl_builder.cpp)."]
     failures = [r for r in rows if r["status"] != "ok"]
     if failures:
         lines += ["", "Failures:", ""]
