@@ -1,4 +1,4 @@
-// `kdray build SCENE.obj`: load, build, check nothing was lost, print the tree's statistics.
+// `kdray build SCENE.obj`: load, build (--repeat: again, timed), print its statistics, save it.
 #include <algorithm>
 #include <iostream>
 #include <memory>
