@@ -344,7 +344,15 @@ def main():
     parser.add_argument("--no-shared", action="store_true", help="leave ../shared/scenes out")
     parser.add_argument("--peer", help="a built embree_ref (default: build it when ../shared "
                                        "has the peer; without it leaks are counted by kdray)")
+    parser.add_argument("--plot-only", action="store_true",
+                        help="redraw the plots of --out from its CSVs, measuring nothing")
     args = parser.parse_args()
+    if args.plot_only:
+        accuracy_plots.ensure_matplotlib([os.path.abspath(__file__), *sys.argv[1:]])
+        rows = [accuracy_plots.read_csv_rows(os.path.join(args.out, f"{name}.csv"))
+                for name in ("tree_quality", "image_accuracy", "robustness")]
+        accuracy_plots.plot_all(args.out, *rows)
+        return 0
     if not shutil.which("oiiotool"):
         sys.exit("accuracy_vs_time: oiiotool is missing (apt-get install openimageio-tools)")
     accuracy_plots.ensure_matplotlib([os.path.abspath(__file__), *sys.argv[1:]])

@@ -16,7 +16,6 @@ recorded them says so, until the benchmark is re-run).
   scripts/update_docs.py --check   # exit 1, naming each table that differs from its data
 """
 import argparse
-import csv
 import json
 import math
 import os
@@ -24,7 +23,7 @@ import re
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from accuracy_plots import best_tree_settings  # noqa: E402
+from accuracy_plots import best_tree_settings, read_csv_rows  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DOCS = os.path.join(ROOT, "docs")  # both moved by --root
@@ -55,18 +54,6 @@ class Data:
                 f"on {r['machine']}.")
 
 
-def _number(text):
-    if text == "":
-        return ""
-    try:
-        return int(text)
-    except ValueError:
-        try:
-            return float(text)
-        except ValueError:
-            return text
-
-
 def load(stem, rows_key="rows", csv_fallback=None):
     """docs/STEM.json; when the script has not written one yet, the CSV it wrote before
     (numbers parsed, no run record)."""
@@ -76,9 +63,7 @@ def load(stem, rows_key="rows", csv_fallback=None):
             return Data(path, json.load(f), rows_key)
     if csv_fallback:
         path = os.path.join(DOCS, csv_fallback)
-        with open(path, newline="") as f:
-            rows = [{k: _number(v) for k, v in r.items()} for r in csv.DictReader(f)]
-        return Data(path, {rows_key: rows}, rows_key)
+        return Data(path, {rows_key: read_csv_rows(path)}, rows_key)
     raise FileNotFoundError(f"update_docs: {os.path.relpath(path, ROOT)} is missing")
 
 
