@@ -251,7 +251,9 @@ def plot_robustness(plt, path, robust_rows):
         ax.set_xticks([x + 0.4 - width / 2 for x in range(len(scenes))], scenes, rotation=20,
                       fontsize=7, ha="right")
         ax.set_ylabel(label)
-        ax.legend(fontsize=8)
+        # Room above the bars for the legend, which would hide the tallest.
+        ax.set_ylim(0, 1.5 * max([r[key] for r in rows if r[key] != ""] + [1]))
+        ax.legend(fontsize=8, loc="upper left")
     axes[0].set_title("Speed: primary + shadow rays", fontsize=10)
     axes[1].set_title("Leaks: closed meshes, camera inside, rays through vertices", fontsize=10)
     fig.tight_layout()
