@@ -1,21 +1,49 @@
-// test_cli_effects.cpp — the effects `kdray render` decides for a scene, and the reasons it gives,
-// as stats.json records them, on the default (OpenCL) path: a matte scene, a mirror, a glass and
-// a lit scene, each a head-on quad whose MTL calls for exactly one thing (README, "What is
-// simulated: only what the scene calls for"); and the rays the frame cast follow the decision.
+// test_cli_default_path.cpp — the kdray binary on its default path, the OpenCL builder and
+// tracer (test_cli.cpp runs most cases on the CPU reference): `build` saves a tree that passes
+// the invariant checker, `render` writes AOVs whose every hit is brute force's; and the effects
+// `render` decides for a scene, with the reasons stats.json gives, for a matte scene, a mirror,
+// a glass and a lit scene, each a head-on quad whose MTL calls for one thing (README, "What is
+// simulated: only what the scene calls for"), and the rays the frame cast follow the decision.
 #include <doctest/doctest.h>
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "core/camera.h"
+#include "core/image.h"
+#include "core/kd_render.h"
+#include "core/render_file.h"
+#include "core/render_setup.h"
+#include "core/scene.h"
+#include "core/tree_check.h"
+#include "core/tree_file.h"
+#include "core/tree_stats.h"
 #include "tests/support.h"
 
 namespace fs = std::filesystem;
+using namespace kdray;
 using namespace kdray::test;
 
 namespace {
+
+/// An OBJ of the scene's triangles, one shape, no materials.
+fs::path write_scene_obj(const fs::path& path, const Scene& scene) {
+    std::ostringstream obj;
+    obj.precision(9);
+    for (std::size_t t = 0; t < scene.triangle_count(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 v = scene.vertex(t, k);
+            obj << "v " << v.x << ' ' << v.y << ' ' << v.z << '\n';
+        }
+    for (std::size_t t = 0; t < scene.triangle_count(); ++t)
+        obj << "f " << 3 * t + 1 << ' ' << 3 * t + 2 << ' ' << 3 * t + 3 << '\n';
+    return write_text_file(path, obj.str());
+}
 
 struct Case {
     const char* name;
@@ -26,7 +54,7 @@ struct Case {
 /// Renders the quad with `c`'s material and lights through the binary's default path and returns
 /// its frame record.
 nlohmann::json rendered_frame(const Case& c) {
-    const fs::path dir = fresh_temp_dir(std::string("cli-effects-") + c.name);
+    const fs::path dir = fresh_temp_dir(std::string("cli-default-effects-") + c.name);
     write_text_file(dir / "quad.mtl", std::string("newmtl m\n") + c.mtl);
     write_text_file(dir / "quad.obj",
                     "mtllib quad.mtl\nusemtl m\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
@@ -46,6 +74,72 @@ nlohmann::json rendered_frame(const Case& c) {
 }
 
 }  // namespace
+
+TEST_CASE("kdray build, default path: the OpenCL tree it saves passes the checker, as reported") {
+    const fs::path dir = fresh_temp_dir("cli-default-build");
+    const Scene scene = random_triangles(600, 31);
+    const fs::path obj = write_scene_obj(dir / "scene.obj", scene);
+    const CommandResult r =
+        run_kdray({"build", obj.string(), "--json", "-o", (dir / "scene.kdt").string()});
+    REQUIRE_MESSAGE(r.status == 0, r.err);
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    CHECK(j["builder"] == "opencl");
+    const TreeFile file = read_tree_file(dir / "scene.kdt");
+    const Scene loaded = load_obj(obj);
+    const std::vector<std::string> errors = check_tree(file.tree, loaded);
+    CHECK_MESSAGE(errors.empty(), (errors.empty() ? std::string() : errors.front()));
+    CHECK(j["nodes"].get<std::size_t>() == file.tree.nodes.size());
+    const TreeStats stats =
+        compute_tree_stats(file.tree, loaded.triangle_count(), file.tree.params.costs);
+    CHECK(j["sah_cost"].get<double>() == doctest::Approx(stats.sah_cost).epsilon(1e-9));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("kdray render, default path: every AOV hit is brute force's, the tracer is OpenCL") {
+    const fs::path dir = fresh_temp_dir("cli-default-render");
+    const Scene scene = random_triangles(400, 32);
+    write_scene_obj(dir / "in" / "frame_1.obj", scene);
+    write_scene_obj(dir / "in" / "frame_2.obj", scene);
+    const fs::path render = write_text_file(dir / "render.json", R"({
+  "image": {"width": 48, "height": 32},
+  "camera": {"position": [0.5, 0.5, 3], "look_at": [0.5, 0.5, 0.5], "up": [0, 1, 0], "fov_y": 50},
+  "lights": [{"type": "point", "position": [0.5, 3, 2], "intensity": [10, 10, 10]}]
+})");
+    const fs::path out = dir / "out";
+    const CommandResult r = run_kdray({"render", (dir / "in" / "frame_1.obj").string(),
+                                       (dir / "in" / "frame_2.obj").string(), "-o", out.string(),
+                                       "--camera", render.string(), "--aov", "-q"});
+    REQUIRE_MESSAGE(r.status == 0, r.err);
+    std::ifstream in(out / "stats.json");
+    const nlohmann::json stats = nlohmann::json::parse(in);
+    REQUIRE(stats["frames"].size() == 2);
+    for (const auto& frame : stats["frames"]) {
+        CHECK(frame["tracer"] == "opencl");
+        CHECK(frame["tree"]["builder"] == "opencl");
+        CHECK(frame["rays"]["primary"] == 48 * 32);
+    }
+    const RenderSettings settings = load_render_file(render);
+    for (const char* stem : {"frame_1", "frame_2"}) {
+        INFO(stem);
+        CHECK(fs::exists(out / (std::string(stem) + ".png")));
+        const HitBuffer aov = read_aov(out / (std::string(stem) + ".aov.exr"));
+        const Scene loaded = load_obj(dir / "in" / (std::string(stem) + ".obj"));
+        const RenderInputs inputs = prepare_render(loaded, settings, settings.camera_at(0), 0);
+        REQUIRE(aov.width == 48);
+        REQUIRE(aov.height == 32);
+        int mismatches = 0, hits = 0;
+        for (int y = 0; y < aov.height; ++y)
+            for (int x = 0; x < aov.width; ++x) {
+                const KdRay ray = kd_camera_ray(&inputs.view, float(x) + 0.5f, float(y) + 0.5f);
+                const KdHit expected = brute_force_closest(loaded, ray);
+                hits += expected.prim != KDRAY_NO_HIT;
+                mismatches += !hits_agree(aov.hits[std::size_t(y) * aov.width + x], expected);
+            }
+        CHECK(hits > 100);
+        CHECK(mismatches == 0);
+    }
+    fs::remove_all(dir);
+}
 
 TEST_CASE("stats.json's effects and their reasons: matte, mirror, glass and a lit scene") {
     const char* none = "[]";
