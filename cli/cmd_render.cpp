@@ -242,7 +242,7 @@ int run_render(const RenderCommand& command) {
         {"max_depth", settings.max_depth},
         {"overrides", overrides},
         {"intersect", command.intersect},
-        {"packets", command.packets},
+        {"packets_requested", command.packets},  // each frame's "packets": what ran
         // Before the first frame: the inputs checked, the device opened, the first load started.
         {"setup_ms", setup_ms},
         {"frames", frames},

@@ -192,3 +192,41 @@ TEST_CASE("stats.json's effects and their reasons: matte, mirror, glass and a li
         CHECK(f["rays"]["shadow"].get<int>() > 0);
     }
 }
+
+TEST_CASE("stats.json records whether packets traced, not only what --packets asked for") {
+    const fs::path dir = fresh_temp_dir("cli-default-packets");
+    const Scene scene = random_triangles(200, 33);
+    const fs::path obj = write_scene_obj(dir / "scene.obj", scene);
+    const fs::path render = write_text_file(dir / "render.json", R"({
+  "image": {"width": 16, "height": 16},
+  "camera": {"position": [0.5, 0.5, 3], "look_at": [0.5, 0.5, 0.5], "up": [0, 1, 0], "fov_y": 50},
+  "lights": [{"type": "point", "position": [0.5, 3, 2], "intensity": [10, 10, 10]}]
+})");
+    struct Run {
+        std::vector<std::string> options;
+        bool primary, shadow;
+    };
+    // Packets exist for the watertight test and the OpenCL tracer only: `on` with Möller–Trumbore
+    // or the reference tracer traces one ray at a time.
+    for (const Run& run :
+         {Run{{"--packets", "on"}, true, true}, Run{{"--packets", "off"}, false, false},
+          Run{{"--packets", "on", "--intersect", "moller"}, false, false},
+          Run{{"--packets", "on", "--tracer", "reference"}, false, false}}) {
+        std::vector<std::string> args = {
+            "render", obj.string(),           "--camera", render.string(),
+            "-o",     (dir / "out").string(), "-q"};
+        args.insert(args.end(), run.options.begin(), run.options.end());
+        std::string options;
+        for (const std::string& o : run.options) options += o + " ";
+        INFO(options);
+        const CommandResult r = run_kdray(args);
+        REQUIRE_MESSAGE(r.status == 0, r.err);
+        std::ifstream in(dir / "out" / "stats.json");
+        const nlohmann::json stats = nlohmann::json::parse(in);
+        CHECK(stats["packets_requested"] == run.options[1]);
+        const nlohmann::json& packets = stats["frames"][0]["packets"];
+        CHECK(packets["primary"] == run.primary);
+        CHECK(packets["shadow"] == run.shadow);
+    }
+    fs::remove_all(dir);
+}
