@@ -55,6 +55,8 @@ int run_build(const BuildCommand& command) {
     } else {
         for (const std::string& warning : scene.warnings)
             std::cerr << "kdray: warning: " << warning << "\n";
+        for (const std::string& warning : built.report.warnings)
+            std::cerr << "kdray: warning: " << warning << "\n";
         nlohmann::json table = {{"scene", report["scene"]}, {"tree", report}};
         table["tree"].erase("scene");
         print_table(std::cout, table);
