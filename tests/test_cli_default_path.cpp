@@ -31,20 +31,6 @@ using namespace kdray::test;
 
 namespace {
 
-/// An OBJ of the scene's triangles, one shape, no materials.
-fs::path write_scene_obj(const fs::path& path, const Scene& scene) {
-    std::ostringstream obj;
-    obj.precision(9);
-    for (std::size_t t = 0; t < scene.triangle_count(); ++t)
-        for (int k = 0; k < 3; ++k) {
-            const Vec3 v = scene.vertex(t, k);
-            obj << "v " << v.x << ' ' << v.y << ' ' << v.z << '\n';
-        }
-    for (std::size_t t = 0; t < scene.triangle_count(); ++t)
-        obj << "f " << 3 * t + 1 << ' ' << 3 * t + 2 << ' ' << 3 * t + 3 << '\n';
-    return write_text_file(path, obj.str());
-}
-
 struct Case {
     const char* name;
     const char* mtl;     // the quad's material
@@ -78,7 +64,7 @@ nlohmann::json rendered_frame(const Case& c) {
 TEST_CASE("kdray build, default path: the OpenCL tree it saves passes the checker, as reported") {
     const fs::path dir = fresh_temp_dir("cli-default-build");
     const Scene scene = random_triangles(600, 31);
-    const fs::path obj = write_scene_obj(dir / "scene.obj", scene);
+    const fs::path obj = write_obj(dir / "scene.obj", scene);
     const CommandResult r =
         run_kdray({"build", obj.string(), "--json", "-o", (dir / "scene.kdt").string()});
     REQUIRE_MESSAGE(r.status == 0, r.err);
@@ -98,8 +84,8 @@ TEST_CASE("kdray build, default path: the OpenCL tree it saves passes the checke
 TEST_CASE("kdray render, default path: every AOV hit is brute force's, the tracer is OpenCL") {
     const fs::path dir = fresh_temp_dir("cli-default-render");
     const Scene scene = random_triangles(400, 32);
-    write_scene_obj(dir / "in" / "frame_1.obj", scene);
-    write_scene_obj(dir / "in" / "frame_2.obj", scene);
+    write_obj(dir / "in" / "frame_1.obj", scene);
+    write_obj(dir / "in" / "frame_2.obj", scene);
     const fs::path render = write_text_file(dir / "render.json", R"({
   "image": {"width": 48, "height": 32},
   "camera": {"position": [0.5, 0.5, 3], "look_at": [0.5, 0.5, 0.5], "up": [0, 1, 0], "fov_y": 50},
@@ -196,7 +182,7 @@ TEST_CASE("stats.json's effects and their reasons: matte, mirror, glass and a li
 TEST_CASE("stats.json records whether packets traced, not only what --packets asked for") {
     const fs::path dir = fresh_temp_dir("cli-default-packets");
     const Scene scene = random_triangles(200, 33);
-    const fs::path obj = write_scene_obj(dir / "scene.obj", scene);
+    const fs::path obj = write_obj(dir / "scene.obj", scene);
     const fs::path render = write_text_file(dir / "render.json", R"({
   "image": {"width": 16, "height": 16},
   "camera": {"position": [0.5, 0.5, 3], "look_at": [0.5, 0.5, 0.5], "up": [0, 1, 0], "fov_y": 50},
