@@ -1,4 +1,4 @@
-// `kdray build SCENE.obj`: load, build, check nothing was lost, print the tree's statistics.
+// `kdray build SCENE.obj`: load, build (--repeat: again, timed), print its statistics, save it.
 #include <algorithm>
 #include <iostream>
 #include <memory>
@@ -54,6 +54,8 @@ int run_build(const BuildCommand& command) {
         std::cout << json_text(report) << "\n";
     } else {
         for (const std::string& warning : scene.warnings)
+            std::cerr << "kdray: warning: " << warning << "\n";
+        for (const std::string& warning : built.report.warnings)
             std::cerr << "kdray: warning: " << warning << "\n";
         nlohmann::json table = {{"scene", report["scene"]}, {"tree", report}};
         table["tree"].erase("scene");

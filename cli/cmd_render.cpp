@@ -222,6 +222,10 @@ int run_render(const RenderCommand& command) {
                                       FramePipeline::Output::Write, load_next));
             for (const std::string& warning : scene.warnings)
                 std::cerr << "kdray: warning: " << warning << "\n";
+            for (const auto& warning :
+                 frames.back()["tree"].value("warnings", nlohmann::json::array()))
+                std::cerr << "kdray: warning: " << inputs[i] << ": " << warning.get<std::string>()
+                          << "\n";
         } catch (const Error& e) {
             // Without --keep-going the first bad frame ends the run; the frames before it
             // are complete, and stats.json below records them.
@@ -242,7 +246,7 @@ int run_render(const RenderCommand& command) {
         {"max_depth", settings.max_depth},
         {"overrides", overrides},
         {"intersect", command.intersect},
-        {"packets", command.packets},
+        {"packets_requested", command.packets},  // each frame's "packets": what ran
         // Before the first frame: the inputs checked, the device opened, the first load started.
         {"setup_ms", setup_ms},
         {"frames", frames},

@@ -1,5 +1,5 @@
 // frame.h — what rendering a frame produces, whichever renderer ran: the shaded image, the
-// centre-ray hits for the AOV, and the rays cast by kind.
+// centre-ray hits for the AOV, the rays cast by kind, and whether packets traced them.
 #pragma once
 
 #include <cstdint>
@@ -28,6 +28,10 @@ struct FrameResult {
     HitBuffer hits;
     Image image;
     RayTotals rays;
+    /// Whether the primary rays, and the shadow rays from their hits, were traced in packets:
+    /// what ran, which `--packets auto` decides by device and triangle test (the reference
+    /// tracer never does).
+    bool primary_packets = false, shadow_packets = false;
 };
 
 }  // namespace kdray

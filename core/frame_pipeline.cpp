@@ -88,6 +88,8 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
         {"tree", std::move(tree_record)},
         {"tracer", tracer_.name()},
         {"effects", inputs.effects.to_json()},
+        // What traced in packets, not what --packets asked for (stats.json's packets_requested).
+        {"packets", {{"primary", result.primary_packets}, {"shadow", result.shadow_packets}}},
         {"load_ms", job.load_ms},
         {"load_wait_ms", job.load_wait_ms},
         {"compile_ms", compile_ms},

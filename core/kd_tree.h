@@ -66,6 +66,10 @@ struct BuildReport {
     int large_node_levels = 0;
     int small_node_levels = 0;
     std::size_t device_bytes = 0;  // peak device memory held by the build (0 for CPU builders)
+    /// Large nodes the OpenCL builder made leaves, unsplit, because their level would have held
+    /// more references than its budget (pathological input; each is also a warning below).
+    std::size_t budget_leaves = 0;
+    std::vector<std::string> warnings;  // one line each, for the user and stats.json
 };
 
 struct KdTree {

@@ -48,6 +48,7 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
         j["params"]["empty_bonus"] = p.empty_bonus;
         j["large_node_levels"] = built.report.large_node_levels;
         j["small_node_levels"] = built.report.small_node_levels;
+        j["budget_leaves"] = built.report.budget_leaves;
         j["device_bytes"] = built.report.device_bytes;
         if (triangle_count > 0)
             j["device_bytes_per_triangle"] =
@@ -55,6 +56,7 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
     } else {
         j["params"]["empty_bonus"] = p.empty_bonus;
     }
+    if (!built.report.warnings.empty()) j["warnings"] = built.report.warnings;
     return j;
 }
 

@@ -1,5 +1,6 @@
 """Tables and plots of scripts/accuracy_vs_time.py: Markdown tables of the three sweeps and one
 PNG per sweep (matplotlib, installed with apt when missing)."""
+import csv
 import os
 import shutil
 import subprocess
@@ -30,6 +31,21 @@ def ensure_matplotlib(argv):
         os.execv(APT_PYTHON, [APT_PYTHON, *argv])
     sys.exit("accuracy_vs_time: matplotlib is missing and could not be installed "
              "(apt-get install python3-matplotlib)")
+
+
+def _number(text):
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
+def read_csv_rows(path):
+    """A sweep's CSV as accuracy_vs_time.py wrote it, numbers parsed ("" stays "")."""
+    with open(path, newline="") as f:
+        return [{k: _number(v) for k, v in r.items()} for r in csv.DictReader(f)]
 
 
 def _pyplot():
@@ -114,78 +130,115 @@ def tables_markdown(header, tree_rows, image_rows, robust_rows):
     return "".join(out)
 
 
-def plot_tree_quality(plt, path, tree_rows):
-    scenes = list(dict.fromkeys(r["scene"] for r in tree_rows))
-    fig, axes = plt.subplots(2, len(scenes), figsize=(4.2 * len(scenes), 7.5), squeeze=False)
-    for col, scene in enumerate(scenes):
-        rows = [r for r in tree_rows if r["scene"] == scene]
-        top, bottom = axes[0][col], axes[1][col]
-        for r in rows:
-            colour = "tab:red" if r["builder"] == "reference" else (
-                "tab:blue" if r["setting"].startswith("T=") else
-                "tab:green" if r["setting"].startswith("C_e=") else "tab:purple")
-            top.scatter(r["build_ms"], r["sah_cost"], color=colour)
-            top.annotate(r["setting"], (r["build_ms"], r["sah_cost"]), fontsize=7,
-                         xytext=(3, 3), textcoords="offset points")
-            bottom.scatter(r["build_ms"], r["trace_ms"], color=colour)
-            bottom.annotate(r["setting"], (r["build_ms"], r["trace_ms"]), fontsize=7,
-                            xytext=(3, 3), textcoords="offset points")
-        # Lines of equal build + trace: for a dynamic scene the best setting touches the lowest.
-        worst = max(r["build_ms"] + r["trace_ms"] for r in rows)
-        best = min(r["build_ms"] + r["trace_ms"] for r in rows)
-        for total in (best, (best + worst) / 2):
-            bottom.plot([0, total], [total, 0], ls=":", color="grey", lw=0.8)
-        bottom.set_xlim(0, max(r["build_ms"] for r in rows) * 1.25)
-        bottom.set_ylim(0, max(r["trace_ms"] for r in rows) * 1.25)
-        top.set_title(f"{scene} ({rows[0]['kind']})", fontsize=9)
-        top.set_xlabel("build ms")
-        top.set_ylabel("SAH cost (C_t 15, C_i 20)")
-        bottom.set_xlabel("build ms")
-        bottom.set_ylabel("trace ms (primary + shadow)")
-    fig.suptitle("Tree quality against build time\nblue: large-node threshold T (C_e 0.25), "
-                 "green: empty-space ratio C_e (T 64), purple: large-node split (median or "
-                 "SAH bins), red: reference full SAH; "
-                 "dotted: equal build + trace", fontsize=9)
-    fig.tight_layout()
+def pareto_front(rows, x, y, higher_is_better=False, min_gain=0.0):
+    """The rows no other row beats on both x (less is better) and y, in order of x; a slower row
+    must be better in y by more than min_gain (noise) to join the front."""
+    better = (lambda a, b: a > b + min_gain) if higher_is_better else \
+        (lambda a, b: a < b - min_gain)
+    front, best = [], None
+    for r in sorted(rows, key=lambda r: (x(r), -y(r) if higher_is_better else y(r))):
+        if best is None or better(y(r), best):
+            front.append(r)
+            best = y(r)
+    return front
+
+
+def _draw_front(ax, rows, x, y, label, higher_is_better, is_default, default_label,
+                min_gain=0.0):
+    """Every row as a grey dot, the Pareto front as a labelled line, the default as a star."""
+    ax.scatter([x(r) for r in rows], [y(r) for r in rows], color="darkgrey", s=18, zorder=2,
+               label="off the front")
+    front = pareto_front(rows, x, y, higher_is_better, min_gain)
+    ax.plot([x(r) for r in front], [y(r) for r in front], "o-", color="tab:blue", ms=5,
+            zorder=3, label="Pareto front")
+    for k, r in enumerate(front):
+        # Alternate above and below the line so that neighbours' labels do not overlap.
+        ax.annotate(label(r), (x(r), y(r)), fontsize=7, zorder=5,
+                    xytext=(4, 6 if k % 2 == 0 else -11), textcoords="offset points")
+    for r in rows:
+        if is_default(r):
+            ax.scatter([x(r)], [y(r)], marker="*", s=160, color="tab:red", zorder=4,
+                       label=default_label)
+            break
+    xs = [x(r) for r in rows]
+    if max(xs) > 5 * min(xs):  # a few settings far slower than the rest: keep the front legible
+        ax.set_xscale("log")
+    ax.grid(alpha=0.3, which="both")
+
+
+def frame_ms(r):
+    """What a frame costs with this tree setting: build + trace when the scene is rebuilt every
+    frame, the trace alone when it is built once."""
+    return r["build_ms"] + r["trace_ms"] if r["kind"] == "dynamic" else r["trace_ms"]
+
+
+def _panels(plt, count):
+    """A figure of `count` panels, at most three a row; the unused ones hidden."""
+    cols = min(3, count)
+    rows = (count + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(5.0 * cols, 4.2 * rows), squeeze=False)
+    flat = [ax for row in axes for ax in row]
+    for ax in flat[count:]:
+        ax.set_visible(False)
+    return fig, flat[:count]
+
+
+def _finish(fig, axes, title, path, plt):
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def plot_tree_quality(plt, path, tree_rows):
+    scenes = list(dict.fromkeys(r["scene"] for r in tree_rows))
+    fig, axes = _panels(plt, len(scenes))
+    for ax, scene in zip(axes, scenes):
+        rows = [r for r in tree_rows if r["scene"] == scene]
+        _draw_front(ax, rows, frame_ms, lambda r: r["sah_cost"], lambda r: r["setting"], False,
+                    lambda r: r["setting"] == "T=64", "default (T=64, C_e=0.25, 32 bins)",
+                    min_gain=0.002 * min(r["sah_cost"] for r in rows))
+        kind = rows[0]["kind"]
+        ax.set_title(f"{scene} ({kind})", fontsize=9)
+        ax.set_xlabel("ms per frame (" + ("build + trace" if kind == "dynamic" else "trace")
+                      + ")")
+        ax.set_ylabel("SAH cost (C_t 15, C_i 20), lower is better")
+    _finish(fig, axes, "Which tree setting? Frame time against tree quality; labelled: the "
+            "settings no other beats on both", path, plt)
 
 
 def plot_image_accuracy(plt, path, image_rows):
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
-    for sweep, ax, key in (("spp", axes[0], "spp"), ("max_depth", axes[1], "max_depth")):
-        for scene in dict.fromkeys(r["scene"] for r in image_rows):
-            rows = [r for r in image_rows if r["scene"] == scene and r["sweep"] == sweep]
-            ax.plot([r["trace_ms"] for r in rows], [r["psnr"] for r in rows], marker="o",
-                    label=scene)
-            for r in rows:
-                ax.annotate(str(r[key]), (r["trace_ms"], r["psnr"]), fontsize=7,
-                            xytext=(3, -9), textcoords="offset points")
-        if sweep == "spp":
-            ax.set_xscale("log")
-        ax.set_xlabel("trace ms" + (" (log)" if sweep == "spp" else ""))
-        ax.set_ylabel("PSNR dB against the reference")
-        ax.set_title(f"{sweep} sweep" + (" (max_depth 8)" if sweep == "spp" else
-                                         f" (spp {rows[0]['spp'] if rows else ''})"),
-                     fontsize=10)
-        ax.legend(fontsize=8)
-        ax.grid(alpha=0.3)
-    fig.suptitle("Image accuracy against render time (labels: spp, max_depth)", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    scenes = list(dict.fromkeys(r["scene"] for r in image_rows))
+    fig, axes = _panels(plt, len(scenes))
+    for ax, scene in zip(axes, scenes):
+        rows = [r for r in image_rows if r["scene"] == scene]
+        _draw_front(ax, rows, lambda r: r["trace_ms"], lambda r: r["psnr"],
+                    lambda r: f"spp {r['spp']}, depth {r['max_depth']}", True,
+                    lambda r: r["sweep"] == "spp" and r["spp"] == 1,
+                    "render file's default spp 1 (max_depth 8)", min_gain=0.1)
+        ax.set_xscale("log")
+        ax.set_title(scene, fontsize=9)
+        ax.set_xlabel("ms per frame (trace, log scale)")
+        ax.set_ylabel("PSNR dB against the reference, higher is better")
+    _finish(fig, axes, "Which spp and max_depth? Render time against image error; labelled: "
+            "the settings no other beats on both", path, plt)
 
 
 MODE_COLOURS = {"watertight": "tab:blue", "watertight, packets": "tab:green",
                 "moller": "tab:orange", "Embree peer": "tab:grey"}
+MODE_LABELS = {"watertight, packets": "watertight, packets (the default on CPU devices)",
+               "moller": "Möller–Trumbore"}
 
 
 def plot_robustness(plt, path, robust_rows):
     ordinary = [r for r in robust_rows if r["pixels"] == ""]
     hard = [r for r in robust_rows if r["pixels"] != ""]
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
-    for ax, rows, key, label in ((axes[0], ordinary, "trace_ms", "trace ms"),
-                                 (axes[1], hard, "leaks", "leaking pixels")):
+    for ax, rows, key, label in ((axes[0], ordinary, "trace_ms", "ms per frame (trace)"),
+                                 (axes[1], hard, "leaks", "leaking pixels (of "
+                                  f"{hard[0]['pixels'] if hard else 0} rays)")):
         scenes = list(dict.fromkeys(r["scene"] for r in rows))
         modes = [m for m in MODE_COLOURS if any(r["intersect"] == m for r in rows)]
         width = 0.8 / max(1, len(modes))
@@ -193,12 +246,14 @@ def plot_robustness(plt, path, robust_rows):
             values = [next((r[key] for r in rows if r["scene"] == s and r["intersect"] == mode),
                            0) for s in scenes]
             bars = ax.bar([x + width * i for x in range(len(scenes))], values, width=width,
-                          label=mode, color=MODE_COLOURS[mode])
+                          label=MODE_LABELS.get(mode, mode), color=MODE_COLOURS[mode])
             ax.bar_label(bars, fmt="%.0f", fontsize=7)
         ax.set_xticks([x + 0.4 - width / 2 for x in range(len(scenes))], scenes, rotation=20,
                       fontsize=7, ha="right")
         ax.set_ylabel(label)
-        ax.legend(fontsize=8)
+        # Room above the bars for the legend, which would hide the tallest.
+        ax.set_ylim(0, 1.5 * max([r[key] for r in rows if r[key] != ""] + [1]))
+        ax.legend(fontsize=8, loc="upper left")
     axes[0].set_title("Speed: primary + shadow rays", fontsize=10)
     axes[1].set_title("Leaks: closed meshes, camera inside, rays through vertices", fontsize=10)
     fig.tight_layout()

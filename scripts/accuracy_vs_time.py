@@ -15,8 +15,9 @@
    the camera inside (every ray must hit: a miss is a leak), at the origin and 1e5 away from it;
    counted by kdray's hit_pixels and, when the Embree peer builds, by `embree_ref --compare`.
 
-Every figure comes from the runs' stats.json (and oiiotool's diff). Writes CSV files, a Markdown
-table (tables.md) and PNG plots into --out. A default run also uses ../shared/scenes when present;
+Every figure comes from the runs' stats.json (and oiiotool's diff). Writes CSV files, results.json
+(the rows with the commit, machine and command), a Markdown table (tables.md) and PNG plots
+into --out. A default run also uses ../shared/scenes when present;
 --quick uses testdata only with few settings; --check verifies that every configuration produced a
 valid row, that the image error falls as spp rises and that the watertight test never leaks (it
 asserts nothing about speed).
@@ -26,7 +27,6 @@ asserts nothing about speed).
 """
 import argparse
 import csv
-import datetime
 import json
 import math
 import os
@@ -38,8 +38,8 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import (ROOT, SHARED, build_peer, machine_description, median,  # noqa: E402
-                          run_json)
+from bench_common import (ROOT, SHARED, build_peer, median, run_json, run_record,  # noqa: E402
+                          write_json)
 from bench_render import camera_at  # noqa: E402
 
 import accuracy_plots  # noqa: E402
@@ -344,7 +344,15 @@ def main():
     parser.add_argument("--no-shared", action="store_true", help="leave ../shared/scenes out")
     parser.add_argument("--peer", help="a built embree_ref (default: build it when ../shared "
                                        "has the peer; without it leaks are counted by kdray)")
+    parser.add_argument("--plot-only", action="store_true",
+                        help="redraw the plots of --out from its CSVs, measuring nothing")
     args = parser.parse_args()
+    if args.plot_only:
+        accuracy_plots.ensure_matplotlib([os.path.abspath(__file__), *sys.argv[1:]])
+        rows = [accuracy_plots.read_csv_rows(os.path.join(args.out, f"{name}.csv"))
+                for name in ("tree_quality", "image_accuracy", "robustness")]
+        accuracy_plots.plot_all(args.out, *rows)
+        return 0
     if not shutil.which("oiiotool"):
         sys.exit("accuracy_vs_time: oiiotool is missing (apt-get install openimageio-tools)")
     accuracy_plots.ensure_matplotlib([os.path.abspath(__file__), *sys.argv[1:]])
@@ -363,9 +371,13 @@ def main():
         write_csv(os.path.join(args.out, "image_accuracy.csv"), image_rows)
         robust_rows = sweep_robustness(kdray, plan, tmp, peer, log)
         write_csv(os.path.join(args.out, "robustness.csv"), robust_rows)
-    machine = machine_description(kdray)
-    header = (f"Measured {datetime.date.today()} with `scripts/accuracy_vs_time.py"
-              f"{' --quick' if args.quick else ''}` in {time.time() - started:.0f} s on {machine}.")
+    record = run_record(kdray)
+    header = (f"Measured {record['date']} at {record['commit']} with `{record['command']}` in "
+              f"{time.time() - started:.0f} s on {record['machine']}.")
+    # The rows again with the run's record: what scripts/update_docs.py generates tables from.
+    write_json(os.path.join(args.out, "results.json"),
+               {**record, "tree_quality": tree_rows, "image_accuracy": image_rows,
+                "robustness": robust_rows})
     with open(os.path.join(args.out, "tables.md"), "w") as f:
         f.write(accuracy_plots.tables_markdown(header, tree_rows, image_rows, robust_rows))
     accuracy_plots.plot_all(args.out, tree_rows, image_rows, robust_rows)

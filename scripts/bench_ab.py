@@ -21,7 +21,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import ROOT, SHARED, machine_description, run_json  # noqa: E402
+from bench_common import ROOT, SHARED, git_commit, machine_description, run_json  # noqa: E402
 
 BUILD_SCENES = ["bart-kitchen/frame_000.obj", "dragon/dragon_res2.obj", "sponza-dabrovic/sponza.obj",
                 "bunny/bunny.obj"]
@@ -43,14 +43,6 @@ def render_run(binary, folder):
             stats = json.load(f)
     keys = ("build_ms", "trace_ms", "frame_ms")
     return {k: statistics.median(fr[k] for fr in stats["frames"]) for k in keys}
-
-
-def git_commit():
-    try:
-        return subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
-                              capture_output=True, text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def main():

@@ -8,7 +8,7 @@ For each scene and builder: a warm-up build, then the median of --repeat builds 
 Beside kdray's warm median, its cold figure: --cold fresh processes that each build once, as a
 user's single `kdray build` does (the median of their build_ms, and of the whole process's wall
 time, which adds the OBJ load, the device opened and the programs built).
-Writes docs/bench-build.md and docs/bench-build.csv (or --out) with the machine it ran on.
+Writes docs/bench-build.md, .csv and .json (or --out) with the commit, machine and command.
 
   scripts/bench_build.py --kdray build/kdray [--repeat 5] [--cold 5] [--no-reference]
                          [--scenes SUBSTR]
@@ -19,7 +19,6 @@ build and one `build --repeat` process in turn (so that a slow spell of a shared
 both), and writes OUT.json and OUT.md: the medians, the ratio cold / warm, and per stage.
 """
 import argparse
-import datetime
 import json
 import os
 import resource
@@ -28,8 +27,8 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import (ROOT, benchmark_scenes, build_peer, machine_description, median,  # noqa
-                          run_json, write_report)
+from bench_common import (ROOT, benchmark_scenes, build_peer, median, run_json,  # noqa
+                          run_record, write_json, write_report)
 
 # What `kdray build --json` reports of the process beside the build (absent from older builds),
 # and what cold_build measures of it.
@@ -101,13 +100,11 @@ def cold_only(args):
         print(f"{name}: cold {scenes[name]['cold_build_ms']:.1f} ms (process "
               f"{scenes[name]['cold_process_ms']:.0f} ms), warm "
               f"{scenes[name]['warm_build_ms']:.1f} ms", file=sys.stderr)
-    result = {"date": str(datetime.date.today()), "machine": machine_description(args.kdray),
-              "kdray": args.kdray, "rounds": args.cold, "repeat": args.repeat,
-              "pocl_cache_dir": os.environ.get("POCL_CACHE_DIR", ""), "scenes": scenes}
+    result = {**run_record(args.kdray), "kdray": args.kdray, "rounds": args.cold,
+              "repeat": args.repeat, "pocl_cache_dir": os.environ.get("POCL_CACHE_DIR", ""),
+              "scenes": scenes}
     os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    with open(args.out + ".json", "w") as f:
-        json.dump(result, f, indent=2)
-        f.write("\n")
+    write_json(args.out + ".json", result)
     lines = ["# Cold and warm builds", "",
              f"Run {result['date']} on {result['machine']}.",
              f"{args.cold} rounds, each one fresh `kdray build SCENE --json` (cold: its build_ms, "
@@ -194,10 +191,11 @@ def main():
     def fmt(v, digits=1):
         return f"{v:.{digits}f}" if isinstance(v, float) else ("" if v is None else str(v))
 
+    record = run_record(args.kdray)
     lines = [
         "# Build benchmark",
         "",
-        f"Run {datetime.date.today()} on {machine_description(args.kdray)}.",
+        f"Run {record['date']} at {record['commit']} on {record['machine']}.",
         f"Median of {args.repeat} builds after a warm-up (reference: {args.reference_repeat}); "
         f"OpenCL cold: the median of {args.cold} fresh processes that build once (the build's "
         "build_ms, and the process's wall time with the load, the device and the programs). "
@@ -238,6 +236,9 @@ def main():
             f"{fmt(r.get('reference_sah'))} | {ratio(r['opencl_sah'], r.get('reference_sah'))} | "
             f"{r['opencl_nodes']} | {fmt(r.get('opencl_bytes_per_tri'), 0)} |")
     write_report(args.out, lines + level_lines, rows)
+    write_json(args.out + ".json", {**record, "repeat": args.repeat,
+                                    "reference_repeat": args.reference_repeat,
+                                    "cold": args.cold, "rows": rows})
     return 0
 
 

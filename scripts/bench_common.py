@@ -1,11 +1,13 @@
 """Helpers the benchmark scripts share: the scene list, running kdray and the Embree peer, and a
 description of the machine the figures were taken on."""
 import csv
+import datetime
 import json
 import os
 import platform
 import statistics
 import subprocess
+import sys
 import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -72,6 +74,32 @@ def machine_description(kdray):
         pass
     return (f"{cpu}, {os.cpu_count()} cores; OpenCL: {', '.join(devices) or 'none'}; "
             f"{platform.system()} {platform.release()}")
+
+
+def git_commit():
+    """The commit the figures were measured at (with "-dirty" when the tree had changes)."""
+    try:
+        commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
+                                capture_output=True, text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True, check=True).stdout.strip()
+        return commit + ("-dirty" if dirty else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def run_record(kdray):
+    """What every benchmark's JSON records of its run, so that scripts/update_docs.py can say
+    where a figure came from: the date, the commit, the machine and the command."""
+    return {"date": str(datetime.date.today()), "commit": git_commit(),
+            "machine": machine_description(kdray),
+            "command": " ".join([os.path.relpath(sys.argv[0], ROOT), *sys.argv[1:]])}
+
+
+def write_json(path, value):
+    with open(path, "w") as f:
+        json.dump(value, f, indent=1)
+        f.write("\n")
 
 
 def median(values):

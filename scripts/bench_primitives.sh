@@ -46,9 +46,10 @@ cxx=$(grep -m1 '^CMAKE_CXX_COMPILER:' "$build_dir/CMakeCache.txt" | cut -d= -f2)
 cxx_version=$("$cxx" --version | head -1)
 
 python3 - "$results" "$processes" "$out_md" "$cpu" "$(nproc)" "$pocl" "$device" "$boost" \
-    "$cxx_version" "$(cut -d' ' -f1-3 /proc/loadavg)" <<'EOF'
+    "$cxx_version" "$(cut -d' ' -f1-3 /proc/loadavg)" "$(git rev-parse --short HEAD)" \
+    "scripts/bench_primitives.sh $processes" <<'EOF'
 import collections, statistics, sys
-res, processes, out, cpu, cores, pocl, device, boost, cxx, load = sys.argv[1:]
+res, processes, out, cpu, cores, pocl, device, boost, cxx, load, commit, command = sys.argv[1:]
 processes = int(processes)
 
 def read(path):
@@ -95,6 +96,7 @@ L.append(f"- OpenCL: {pocl}")
 L.append(f"- Device: {device}")
 L.append(f"- Boost {boost.replace('_', '.')} (Debian libboost-dev), {cxx}, Release build")
 L.append(f"- Load average when the report was written: {load} (shared machine; runs at nice 10)")
+L.append(f"- Commit {commit}, command `{command}`")
 L.append("")
 L.append("## Steady state")
 L.append("")

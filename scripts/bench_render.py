@@ -9,12 +9,11 @@ run, with the same camera and thread count.
    the same frames with the same keyframed cameras; three rounds of both sides in turn, each
    frame's figure its median over the rounds.
 3. The glass room (testdata/cornell) at 1 spp, 640x480, with every effect.
-Writes docs/bench-render.md and .csv with the machine it ran on.
+Writes docs/bench-render.md, .csv and .json with the commit, machine and command.
 
   scripts/bench_render.py --kdray build/kdray [--repeat 3] [--scenes SUBSTR]
 """
 import argparse
-import datetime
 import json
 import os
 import shutil
@@ -23,8 +22,8 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import (ROOT, SHARED, benchmark_scenes, build_peer, machine_description,  # noqa
-                          median, run_json, write_report)
+from bench_common import (ROOT, SHARED, benchmark_scenes, build_peer, median,  # noqa
+                          run_json, run_record, write_json, write_report)
 
 THREADS = os.cpu_count()
 # Dynamic scenes: rounds of both sides in turn, and the peer's builds and traces per frame in a
@@ -201,8 +200,9 @@ def main():
         dyn = dynamic(args.kdray, peer, tmp)
         glass = glass_room(args.kdray, tmp)
 
+    record = run_record(args.kdray)
     lines = ["# Render benchmark", "",
-             f"Run {datetime.date.today()} on {machine_description(args.kdray)}; "
+             f"Run {record['date']} at {record['commit']} on {record['machine']}; "
              f"Embree with {THREADS} threads.", "",
              "## Primary rays (1 per pixel centre, no shading beyond a headlight)", "",
              "| scene | triangles | kdray OpenCL Mrays/s | Embree Mrays/s | kdray / Embree |",
@@ -228,6 +228,8 @@ def main():
               f"{glass['trace_ms']:.0f} ms); rays {json.dumps(glass['rays'])}."]
     rows = [dict(kind="primary", **r) for r in prim] + [dict(kind="dynamic", **r) for r in dyn]
     write_report(args.out, lines, rows)
+    write_json(args.out + ".json", {**record, "threads": THREADS, "rows": rows,
+                                    "glass_room": glass})
     return 0
 
 

@@ -6,8 +6,9 @@ only of an animation, since the peer uses the first camera key) is rendered by
 `kdray render --aov` and by `embree_ref --aov`, and `embree_ref --compare` counts the pixels that
 disagree (conventions.md). A scene passes when mismatch_fraction <= 1e-4.
 
-Exit status: 0 all agree, 1 some disagree or a run failed, 77 when ../shared (or a built peer) is
-absent, so that CTest reports a skip.
+Exit status: 0 all agree; 1 some disagree, a run failed, or ../shared is there but has no scene
+folder with a render.json and an OBJ, or its Embree peer does not build (each says which); 77
+only when ../shared itself is absent, so that CTest reports a skip.
 
   scripts/compare_embree.py --kdray build/kdray [--builder reference] [--tracer reference]
       [--quality low,medium,high]
@@ -22,7 +23,8 @@ import tempfile
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SHARED = os.path.normpath(os.path.join(ROOT, "..", "shared"))
+# KDRAY_SHARED_DIR points elsewhere (a test of the failures below).
+SHARED = os.environ.get("KDRAY_SHARED_DIR") or os.path.normpath(os.path.join(ROOT, "..", "shared"))
 SKIP = 77
 
 # Scenes too big for a quick run (seconds of CPU reference build each); --quick leaves them out.
@@ -70,9 +72,15 @@ def main():
                              "at, each compared with Embree (default: kdray's default)")
     args = parser.parse_args()
 
-    if not os.path.isdir(os.path.join(SHARED, "scenes")):
-        print("compare_embree: skipped: ../shared/scenes is absent")
+    if not os.path.isdir(SHARED):
+        print(f"compare_embree: skipped: {SHARED} is absent")
         return SKIP
+    scenes = list(scene_files(args.quick)) if os.path.isdir(os.path.join(SHARED, "scenes")) \
+        else []
+    if not scenes:
+        print(f"compare_embree: FAIL: {SHARED} exists but {os.path.join(SHARED, 'scenes')} has no "
+              "scene folder with a render.json and an OBJ", file=sys.stderr)
+        return 1
     with tempfile.TemporaryDirectory(prefix="kdray-compare-") as tmp:
         peer = args.peer
         if not peer and args.peer_dir:
@@ -81,11 +89,12 @@ def main():
         if not peer:
             peer = build_peer(os.path.join(tmp, "peer"))
         if not peer:
-            print("compare_embree: skipped: the Embree peer is not available")
-            return SKIP
+            print(f"compare_embree: FAIL: {SHARED} exists but its Embree peer "
+                  "(peers/embree/build.sh) is missing or does not build", file=sys.stderr)
+            return 1
         failures = 0
         qualities = [q for q in args.quality.split(",") if q] or [None]
-        for folder, obj, camera in scene_files(args.quick):
+        for folder, obj, camera in scenes:
             stem = os.path.splitext(os.path.basename(obj))[0]
             theirs = os.path.join(tmp, f"{folder}-{stem}.embree.exr")
             subprocess.run([peer, obj, "--camera", camera, "--aov", theirs, "--repeat", "1"],

@@ -20,7 +20,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import ROOT, SHARED, median  # noqa
+from bench_common import ROOT, SHARED, median, run_record  # noqa
 
 TILE = (384, 288)
 # scene folder, OBJ, what the render file gains, why
@@ -147,7 +147,7 @@ def main():
                         args.out + ".png"], check=True)
         costs = effect_costs(args.kdray, tmp, args.repeat)
     with open(args.out + ".json", "w") as f:
-        json.dump({"tile": TILE, "shots": records, "effect_costs": costs}, f, indent=1)
+        json.dump({**run_record(args.kdray), "tile": TILE, "shots": records, "effect_costs": costs}, f, indent=1)
         f.write("\n")
     print(f"wrote {args.out}.png and .json", file=sys.stderr)
 

@@ -19,7 +19,6 @@ docs/accuracy-vs-time/quality_ladder.png (--plot-only redraws them from the JSON
   scripts/quality_ladder.py --plot-only
 """
 import argparse
-import datetime
 import json
 import os
 import subprocess
@@ -27,7 +26,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import ROOT, SHARED, build_peer, machine_description, median, run_json  # noqa
+from bench_common import ROOT, SHARED, build_peer, median, run_json, run_record  # noqa
 from bench_render import primary_only, primary_sequence  # noqa
 from accuracy_plots import _pyplot, ensure_matplotlib  # noqa
 
@@ -265,8 +264,7 @@ def main():
     with tempfile.TemporaryDirectory(prefix="kdray-ladder-") as tmp:
         dyn = dynamic(args.kdray, peer, args.rounds, tmp)
         bld = builds(args.kdray, peer, args.repeat, not args.no_reference, tmp)
-    result = {"date": str(datetime.date.today()), "machine": machine_description(args.kdray),
-              "rounds": args.rounds, "repeat": args.repeat, "dynamic": dyn, "builds": bld,
+    result = {**run_record(args.kdray), "rounds": args.rounds, "repeat": args.repeat, "dynamic": dyn, "builds": bld,
               "defaults": choose_defaults(dyn)}
     with open(args.out + ".json", "w") as f:
         json.dump(result, f, indent=1)

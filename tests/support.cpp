@@ -279,6 +279,19 @@ std::filesystem::path write_text_file(const std::filesystem::path& path, const s
     return path;
 }
 
+std::filesystem::path write_obj(const std::filesystem::path& path, const Scene& scene) {
+    std::ostringstream obj;
+    obj.precision(9);
+    for (std::size_t t = 0; t < scene.triangle_count(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 v = scene.vertex(t, k);
+            obj << "v " << v.x << ' ' << v.y << ' ' << v.z << '\n';
+        }
+    for (std::size_t t = 0; t < scene.triangle_count(); ++t)
+        obj << "f " << 3 * t + 1 << ' ' << 3 * t + 2 << ' ' << 3 * t + 3 << '\n';
+    return write_text_file(path, obj.str());
+}
+
 std::filesystem::path shared_dir() {
     return source_dir() / ".." / "shared";
 }

@@ -77,6 +77,9 @@ std::filesystem::path fresh_temp_dir(const std::string& name);
 /// Writes `text` to `path` (creating parent folders) and returns the path.
 std::filesystem::path write_text_file(const std::filesystem::path& path, const std::string& text);
 
+/// Writes the scene's triangles as an OBJ (one shape, no materials) and returns the path.
+std::filesystem::path write_obj(const std::filesystem::path& path, const Scene& scene);
+
 /// The repository root (for testdata/) and ../shared beside it (may not exist).
 std::filesystem::path source_dir();
 std::filesystem::path shared_dir();

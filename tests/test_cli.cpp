@@ -30,20 +30,6 @@ using namespace kdray::test;
 
 namespace {
 
-/// An OBJ of the given scene's triangles, one shape, no materials.
-fs::path write_obj(const fs::path& path, const Scene& scene) {
-    std::ostringstream obj;
-    obj.precision(9);
-    for (std::size_t t = 0; t < scene.triangle_count(); ++t)
-        for (int k = 0; k < 3; ++k) {
-            Vec3 v = scene.vertex(t, k);
-            obj << "v " << v.x << ' ' << v.y << ' ' << v.z << '\n';
-        }
-    for (std::size_t t = 0; t < scene.triangle_count(); ++t)
-        obj << "f " << 3 * t + 1 << ' ' << 3 * t + 2 << ' ' << 3 * t + 3 << '\n';
-    return write_text_file(path, obj.str());
-}
-
 std::string read_file(const fs::path& path) {
     std::ifstream in(path, std::ios::binary);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};

@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <random>
 #include <set>
 #include <string>
 #include <utility>
@@ -554,4 +555,35 @@ TEST_CASE("opencl builder: a first build allocates about its peak, not a fresh s
     REQUIRE(report.large_node_levels >= 8);
     CHECK(allocated >= report.device_bytes);  // what it held at its peak came from somewhere
     CHECK(allocated <= 7 * report.device_bytes / 4);
+}
+
+TEST_CASE("opencl builder: nodes the reference budget makes leaves are counted and warned about") {
+    // 300 triangles each joining three random points on three different faces of the unit cube:
+    // every plane through the cube cuts most of them, so each level of spatial-median splits
+    // nearly doubles the references until a level would outgrow kReferenceBudgetPerTriangle per
+    // triangle, and that level's nodes become leaves unsplit.
+    std::mt19937 rng(51);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    std::vector<float> tris;
+    for (int t = 0; t < 300; ++t)
+        for (int axis = 0; axis < 3; ++axis) {
+            float p[3] = {u(rng), u(rng), u(rng)};
+            p[axis] = float(t % 2);  // a point on face `axis`, low or high
+            tris.insert(tris.end(), {p[0], p[1], p[2]});
+        }
+    const Scene big = make_scene(std::move(tris), "cube-spanning");
+    BuildParams median;
+    median.large_split_bins = 0;
+    BuildReport report;
+    const KdTree tree = build_opencl(test::opencl_test_device(), big, median, &report);
+    CHECK(report.budget_leaves > 0);
+    REQUIRE(report.warnings.size() == 1);
+    CHECK(report.warnings[0].find(std::to_string(report.budget_leaves) + " large node(s)") == 0);
+    const std::vector<std::string> errors = check_tree(tree, big);
+    CHECK_MESSAGE(errors.empty(), (errors.empty() ? std::string() : errors.front()));
+    // An ordinary scene never meets the budget.
+    BuildReport ordinary;
+    build_opencl(test::opencl_test_device(), test::random_triangles(3000, 52), median, &ordinary);
+    CHECK(ordinary.budget_leaves == 0);
+    CHECK(ordinary.warnings.empty());
 }

@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "core/kd_traverse.h"
 #include "core/reference_builder.h"
+#include "core/sah_events.h"
 #include "core/tree_check.h"
 #include "core/tree_stats.h"
 #include "core/triangle_clip.h"
@@ -273,7 +274,39 @@ TEST_CASE("the depth limit is respected") {
     }
 }
 
-TEST_CASE("the empty-space bonus and the costs change the tree as the SAH says") {
+TEST_CASE("the empty-space bonus scales the SAH of a plane that cuts off empty space") {
+    // Two triangles spanning x in [0, 0.8] and all of y, z in the node box [0, 1]^3: the only
+    // plane that cuts off empty space is x = 0.8, of SAH C_t + C_i * 2 * SA([0,0.8]x[0,1]^2) /
+    // SA([0,1]^3) = 15 + 40 * 5.2 / 6 = 49.67 without the bonus: dearer than the leaf (C_i * 2 =
+    // 40), so no split pays. A bonus of 0.5 halves exactly that plane's cost, to 24.83, and makes
+    // it the split; a bonus of 0.2 (0.8 * 49.67 = 39.73) just beats the leaf too.
+    NodeEvents events;
+    Aabb tri;
+    tri.lo = {0, 0, 0};
+    tri.hi = {0.8f, 1, 1};
+    append_events(events, 0, tri);
+    append_events(events, 1, tri);
+    sort_events(events);
+    Aabb box;
+    box.lo = {0, 0, 0};
+    box.hi = {1, 1, 1};
+    const double leaf = 20.0 * 2;
+    const double cut_off = 15.0 + 20.0 * 2 * (2.0 * (0.8 + 1 + 0.8) / 6.0);
+    for (const float bonus : {0.0f, 0.2f, 0.5f}) {
+        CAPTURE(bonus);
+        BuildParams params;
+        params.empty_bonus = bonus;
+        const SplitChoice choice = find_best_split(events, 2, box, params);
+        REQUIRE(choice.axis == 0);
+        CHECK(choice.pos == 0.8f);
+        CHECK(choice.left_count == 2);
+        CHECK(choice.right_count == 0);
+        CHECK(choice.cost == doctest::Approx(cut_off * (1.0 - bonus)).epsilon(1e-6));
+        CHECK((choice.cost < leaf) == (bonus > 0));
+    }
+}
+
+TEST_CASE("the traversal cost changes the tree as the SAH says") {
     const Scene scene = test::random_triangles(2000, 61, 1.0f, 0.03f);
     BuildParams cheap_traversal;
     cheap_traversal.costs.traversal = 1.0f;

@@ -15,11 +15,6 @@
 namespace kdray::build_detail {
 namespace {
 
-// A large-stage level holding more references than this many per triangle splits no further: its
-// nodes become leaves. Real scenes stay well below it (about 1.2 to 2 in the large stage); it
-// bounds memory on pathological input where every median plane cuts most triangles.
-constexpr std::size_t kReferenceBudgetPerTriangle = 4;
-
 /* Clipping makes a level hold a few percent more references than the one before (Kitchen: up to
  * 1.13 per triangle, dragon res2 1.24), so per-reference arrays of exactly a level's count never
  * fitted the next level: a first build, with no buffers kept from an earlier one, allocated
@@ -205,21 +200,24 @@ LargeLevel LargeLevel::next(BuildContext& ctx, const TriangleBounds& triangles, 
     return next;
 }
 
-int run_large_stage(BuildContext& ctx, TriangleBounds& triangles, const Aabb& bounds,
-                    BuildOutput& output, SmallRoots& small) {
+LargeStageResult run_large_stage(BuildContext& ctx, TriangleBounds& triangles, const Aabb& bounds,
+                                 BuildOutput& output, SmallRoots& small) {
+    LargeStageResult result;
     if (triangles.count <= cl_uint(ctx.params.large_node_threshold)) {
         small.make_scene_root(ctx, triangles, bounds, output);
-        return 0;
+        return result;
     }
     const std::size_t budget = kReferenceBudgetPerTriangle * std::size_t(triangles.count);
-    int levels = 0;
     LargeScratch scratch;
     for (LargeLevel level = LargeLevel::root(ctx, triangles, bounds); level.nodes > 0;) {
-        ++levels;
-        // Nodes at the depth limit become leaves in kd_split_large_nodes.
-        level = level.next(ctx, triangles, level.refs > budget, output, small, scratch);
+        ++result.levels;
+        // Nodes at the depth limit become leaves in kd_split_large_nodes; over the budget, every
+        // node of the level does.
+        const bool over_budget = level.refs > budget;
+        if (over_budget) result.budget_leaves += level.nodes;
+        level = level.next(ctx, triangles, over_budget, output, small, scratch);
     }
-    return levels;
+    return result;
 }
 
 }  // namespace kdray::build_detail

@@ -3,6 +3,8 @@
 // kernels are build_large.cl's).
 #pragma once
 
+#include <cstddef>
+
 #include "cl/build/bounds.h"
 #include "cl/build/build_context.h"
 #include "cl/build/small_roots.h"
@@ -38,9 +40,21 @@ struct LargeLevel {
                     BuildOutput& output, SmallRoots& small, LargeScratch& scratch) const;
 };
 
+/// A large-stage level holding more references than this many per triangle splits no further: its
+/// nodes become leaves. Real scenes stay well below it; it bounds memory on pathological input
+/// where every plane cuts most triangles.
+constexpr std::size_t kReferenceBudgetPerTriangle = 4;
+
+/// What the large-node stage did: its levels, and the nodes it made leaves unsplit because their
+/// level outgrew the reference budget (kReferenceBudgetPerTriangle in large_level.cpp).
+struct LargeStageResult {
+    int levels = 0;
+    std::size_t budget_leaves = 0;
+};
+
 /// Large-node stage (§4.1): levels until no large node is left; a scene of at most T triangles
-/// is one small root from the start. Returns the number of levels.
-int run_large_stage(BuildContext& ctx, TriangleBounds& triangles, const Aabb& bounds,
-                    BuildOutput& output, SmallRoots& small);
+/// is one small root from the start.
+LargeStageResult run_large_stage(BuildContext& ctx, TriangleBounds& triangles, const Aabb& bounds,
+                                 BuildOutput& output, SmallRoots& small);
 
 }  // namespace kdray::build_detail

@@ -66,7 +66,6 @@ struct Build {
     SmallRoots small_roots;
     SmallSubtrees small;
     PreorderTree tree;
-    int large_levels = 0;
 };
 
 }  // namespace
@@ -114,7 +113,8 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
     clock.lap("upload");
     compute_triangle_boxes(ctx, b.triangles);
     clock.lap("aabbs");
-    b.large_levels = run_large_stage(ctx, b.triangles, tree.bounds, b.output, b.small_roots);
+    const LargeStageResult large =
+        run_large_stage(ctx, b.triangles, tree.bounds, b.output, b.small_roots);
     clock.lap("large_nodes");
     b.small =
         run_small_stage(ctx, b.small_roots, b.triangles, std::max(1u, limits.subtree_budget_scale),
@@ -141,7 +141,15 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
         report->build_ms =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
                 .count();
-        report->large_node_levels = b.large_levels;
+        report->large_node_levels = large.levels;
+        report->budget_leaves = large.budget_leaves;
+        if (large.budget_leaves > 0)
+            report->warnings.push_back(
+                std::to_string(large.budget_leaves) +
+                " large node(s) became leaves unsplit: their level would have held more than " +
+                std::to_string(kReferenceBudgetPerTriangle) +
+                " references per triangle (splits cut most triangles), so those leaves hold many "
+                "triangles and trace slowly");
         report->small_node_levels = b.small.levels;
         report->device_bytes = ctx.memory.peak_bytes();
     }

@@ -258,6 +258,8 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
     });
 
     FrameResult frame;
+    frame.primary_packets = packets;
+    frame.shadow_packets = shadow_packets;
     frame.image.width = frame.hits.width = int(view.width);
     frame.image.height = frame.hits.height = int(view.height);
     frame.image.rgb.resize(pixels * 3);
