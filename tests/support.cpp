@@ -10,6 +10,7 @@
 #include <random>
 #include <sstream>
 
+#include "core/kd_render.h"
 #include "core/kd_traverse.h"
 #include "core/math.h"
 
@@ -223,6 +224,20 @@ bool hits_agree(const KdHit& a, const KdHit& b) {
     if (ha != hb) return false;
     if (!ha) return true;
     return std::fabs(a.t - b.t) <= 1e-4f * std::max(1.0f, std::fabs(b.t));
+}
+
+AovAgreement aov_against_brute_force(const HitBuffer& aov, const Scene& scene, const KdView& view) {
+    AovAgreement result;
+    for (int y = 0; y < aov.height; ++y)
+        for (int x = 0; x < aov.width; ++x) {
+            const KdRay ray = kd_camera_ray(&view, float(x) + 0.5f, float(y) + 0.5f);
+            KdHit expected = brute_force_closest(scene, ray);
+            expected.t = scene.frame.scene_length(expected.t);
+            result.hits += expected.prim != KDRAY_NO_HIT;
+            result.mismatches +=
+                !hits_agree(aov.hits[std::size_t(y) * std::size_t(aov.width) + x], expected);
+        }
+    return result;
 }
 
 std::filesystem::path source_dir() {

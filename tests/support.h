@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/image.h"
 #include "core/kd_shared.h"
 #include "core/math.h"
 #include "core/scene.h"
@@ -60,6 +61,14 @@ KdHit brute_force_closest(const Scene& scene, const KdRay& ray);
 /// Two hits agree when both miss, or both hit within a relative 1e-4 (conventions.md); the
 /// triangle may differ on a tie.
 bool hits_agree(const KdHit& a, const KdHit& b);
+
+/// An AOV's centre hits against brute force along conventions.md's camera ray of every pixel,
+/// the brute force's distances mapped to the scene's units as the AOV writes them.
+struct AovAgreement {
+    int hits = 0;        // pixels whose brute-force ray hits
+    int mismatches = 0;  // pixels where the AOV and brute force disagree (hits_agree)
+};
+AovAgreement aov_against_brute_force(const HitBuffer& aov, const Scene& scene, const KdView& view);
 
 /// What running the kdray binary gave: exit status, stdout and stderr.
 struct CommandResult {

@@ -287,17 +287,9 @@ TEST_CASE("kdray render writes images, AOVs that agree with brute force, and sta
     RenderInputs inputs = prepare_render(loaded, settings, settings.camera_at(0, loaded.frame), 0);
     REQUIRE(aov.width == 48);
     REQUIRE(aov.height == 32);
-    int mismatches = 0, hits = 0;
-    for (int y = 0; y < aov.height; ++y)
-        for (int x = 0; x < aov.width; ++x) {
-            KdRay ray = kd_camera_ray(&inputs.view, float(x) + 0.5f, float(y) + 0.5f);
-            KdHit expected = brute_force_closest(loaded, ray);
-            expected.t = loaded.frame.scene_length(expected.t);  // the AOV's Z: scene units
-            hits += expected.prim != KDRAY_NO_HIT;
-            mismatches += !hits_agree(aov.hits[std::size_t(y) * aov.width + x], expected);
-        }
-    CHECK(hits > 100);
-    CHECK(mismatches == 0);
+    const AovAgreement agreement = aov_against_brute_force(aov, loaded, inputs.view);
+    CHECK(agreement.hits > 100);
+    CHECK(agreement.mismatches == 0);
     fs::remove_all(dir);
 }
 
