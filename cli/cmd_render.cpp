@@ -1,14 +1,20 @@
 // `kdray render FRAME.obj... -o OUTDIR`: per frame, load, build, trace and write the image (and
 // the hit AOV), then OUTDIR/stats.json for the run. Every file appears whole or not at all.
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <future>
 #include <iostream>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <utility>
@@ -18,11 +24,14 @@
 #include "cli/commands.h"
 #include "cli/frame_selection.h"
 #include "cli/inputs.h"
+#include "cli/log.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/frame_memory.h"
 #include "core/frame_pipeline.h"
 #include "core/render_file.h"
+#include "core/render_setup.h"
+#include "core/render_stats.h"
 #include "core/scene.h"
 #include "core/stats_json.h"
 #include "core/version.h"
@@ -40,20 +49,11 @@ void create_output_dir(const std::filesystem::path& dir) {
     remove_stale_temporaries(dir);
 }
 
-/// One line on a terminal, rewritten in place: frame i/n, frames per second, time left.
-void show_progress(std::size_t done, std::size_t total, double elapsed_ms) {
-    double fps = elapsed_ms > 0 ? 1000.0 * double(done) / elapsed_ms : 0.0;
-    double eta_s = fps > 0 ? double(total - done) / fps : 0.0;
-    std::fprintf(stderr, "\rkdray: frame %zu/%zu  %.2f fps  ETA %.0f s   ", done, total, fps,
-                 eta_s);
-    if (done == total) std::fprintf(stderr, "\n");
-    std::fflush(stderr);
-}
-
-/// The frame options the command line gives: output folder and format, --aov, --intersect,
-/// --packets; and the clock of compilation that a frame's compile_ms reads.
-FrameOptions frame_options(const RenderCommand& command) {
+/// The frame options the command line gives: output folder, names and format, --aov,
+/// --intersect, --packets; and the clock of compilation that a frame's compile_ms reads.
+FrameOptions frame_options(const RenderCommand& command, const OutputName& name) {
     FrameOptions options;
+    options.name = name;
     options.compile_ms_so_far = compile_ms_total;
     options.out_dir = command.output_dir;
     options.format = command.format;
@@ -71,7 +71,8 @@ FrameOptions frame_options(const RenderCommand& command) {
 /// both, before anything renders. Names are compared without case, as a case-insensitive file
 /// system (macOS, Windows shares) would.
 void check_output_names(const std::vector<std::string>& inputs,
-                        const std::vector<std::size_t>& selected, const RenderCommand& command) {
+                        const std::vector<std::size_t>& selected, const OutputName& output_name,
+                        const RenderCommand& command) {
     std::map<std::string, std::size_t> writer;
     auto lower = [](std::string s) {
         std::transform(s.begin(), s.end(), s.begin(),
@@ -79,7 +80,7 @@ void check_output_names(const std::vector<std::string>& inputs,
         return s;
     };
     for (const std::size_t i : selected) {
-        const std::string stem = std::filesystem::path(inputs[i]).stem().string();
+        const std::string stem = output_name(inputs[i], i);
         std::vector<std::string> names = {stem + "." + command.format};
         if (command.aov) names.push_back(stem + ".aov.exr");
         for (const std::string& name : names) {
@@ -103,11 +104,18 @@ extern "C" void on_interrupt(int signal) {
     std::signal(signal, SIG_DFL);
 }
 
-/// The command line's overrides of the render file (--spp, --size, --ray-depth) applied to
-/// `settings`; returns what each set, for stats.json.
+/// The command line's overrides of the render file (--spp, --size, --ray-depth, --exposure)
+/// applied to `settings`; returns what each set, for stats.json.
 nlohmann::json apply_overrides(const RenderCommand& command, RenderSettings& settings) {
     nlohmann::json used = nlohmann::json::object();
     if (command.spp) used["spp"] = settings.spp = *command.spp;
+    if (command.exposure) {
+        if (!(std::fabs(*command.exposure) <= 64.0))
+            throw UsageError("--exposure " + std::to_string(*command.exposure) +
+                             ": must be between -64 and 64 stops");
+        settings.exposure = float(*command.exposure);
+        used["exposure"] = settings.exposure;
+    }
     if (command.ray_depth) used["ray_depth"] = settings.max_depth = *command.ray_depth;
     if (!command.size.empty()) {
         int width = 0, height = 0;
@@ -123,18 +131,100 @@ nlohmann::json apply_overrides(const RenderCommand& command, RenderSettings& set
     return used;
 }
 
+/// The effects a frame simulates (its record's "effects"), for the log: "shadow rays, textures".
+std::string effects_text(const nlohmann::json& effects) {
+    std::string text;
+    for (const auto& [key, name] : {std::pair{"shadows", "shadow rays"},
+                                    {"reflection", "reflection"},
+                                    {"refraction", "refraction"},
+                                    {"ambient", "ambient"},
+                                    {"area_lights", "area lights"},
+                                    {"textures", "textures"}})
+        if (effects.value(key, false)) text += (text.empty() ? "" : ", ") + std::string(name);
+    return text.empty() ? "direct shading only" : text;
+}
+
+/// The frames of `selected` whose files are all in the output folder already (--skip-existing).
+std::vector<std::size_t> frames_written(const std::vector<std::string>& inputs,
+                                        const std::vector<std::size_t>& selected,
+                                        const OutputName& name, const RenderCommand& command) {
+    std::vector<std::size_t> written;
+    const std::filesystem::path dir = command.output_dir;
+    for (const std::size_t i : selected) {
+        const std::string stem = name(inputs[i], i);
+        std::error_code ec;
+        bool present = std::filesystem::is_regular_file(dir / (stem + "." + command.format), ec);
+        if (command.aov)
+            present = present && std::filesystem::is_regular_file(dir / (stem + ".aov.exr"), ec);
+        if (present) written.push_back(i);
+    }
+    return written;
+}
+
+/// An exclusive lock on the output folder (flock on the folder itself: no lock file to leave
+/// behind) while a run reads, merges and writes its stats.json: the shards of a job array may
+/// finish into one folder at the same moment.
+class StatsLock {
+  public:
+    explicit StatsLock(const std::filesystem::path& dir) {
+        fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+        if (fd_ < 0 || ::flock(fd_, LOCK_EX) != 0)
+            throw Error(dir.string() + ": cannot lock the folder to merge its stats.json: " +
+                        std::strerror(errno));
+    }
+    ~StatsLock() {
+        if (fd_ >= 0) ::close(fd_);
+    }
+    StatsLock(const StatsLock&) = delete;
+    StatsLock& operator=(const StatsLock&) = delete;
+
+  private:
+    int fd_ = -1;
+};
+
+/// The folder's stats.json as it is, null when there is none; throws Error naming it when it is
+/// not one kdray can merge into.
+nlohmann::json existing_stats(const std::filesystem::path& file) {
+    std::error_code ec;
+    const auto status = std::filesystem::symlink_status(file, ec);
+    if (!std::filesystem::exists(status)) return nullptr;
+    if (std::filesystem::is_directory(status))
+        throw Error(file.string() + ": exists and is a directory, where the run writes its stats");
+    try {
+        return read_render_stats(file);
+    } catch (const Error& e) {
+        throw Error(std::string(e.what()) +
+                    "; a run merges its frames into the folder's stats.json: move it away, or "
+                    "render into another folder");
+    }
+}
+
+/// Says, once, why the first frame waits: the device compiles kdray's kernels.
+void announce_kernel_compiles() {
+    set_program_build_listener([said = false](const ProgramBuildEvent& event) mutable {
+        if (!event.done && !said) {
+            spdlog::info(
+                "compiling OpenCL kernels for '{}' (a first run on a device compiles "
+                "them; later runs read the driver's cache)",
+                event.device);
+            said = true;
+        }
+        if (event.done) spdlog::debug("built {} in {:.0f} ms", event.file, event.ms);
+    });
+}
+
 }  // namespace
 
 int run_render(const RenderCommand& command) {
     const auto setup_start = FrameClock::now();
     // Check everything that can be checked before the first frame costs time.
     std::vector<std::string> inputs = expand_inputs(command.inputs);
-    const std::vector<std::size_t> selected =
-        select_frames(inputs.size(), command.frames, command.shard);
+    std::vector<std::size_t> selected = select_frames(inputs.size(), command.frames, command.shard);
     if (selected.empty())
         throw UsageError("--frames/--shard select no frame of the " +
                          std::to_string(inputs.size()) + " inputs");
-    check_output_names(inputs, selected, command);
+    const OutputName output_name(command.name);
+    check_output_names(inputs, selected, output_name, command);
     RenderSettings settings;
     if (!command.render_file.empty()) settings = load_render_file(command.render_file);
     const nlohmann::json overrides = apply_overrides(command, settings);
@@ -153,19 +243,37 @@ int run_render(const RenderCommand& command) {
                     std::to_string(frame_memory.host_bytes >> 20) +
                     " MiB of host memory, more than half of this machine's " +
                     std::to_string(physical >> 20) + " MiB");
+    const std::filesystem::path out_dir = command.output_dir;
+    // A folder's stats.json that cannot be merged into fails the run before it renders.
+    existing_stats(out_dir / "stats.json");
+    if (command.skip_existing) {
+        const std::vector<std::size_t> written =
+            frames_written(inputs, selected, output_name, command);
+        if (!written.empty()) {
+            spdlog::info("skipping {} of {} frame(s): their files are in {}", written.size(),
+                         selected.size(), out_dir.string());
+            std::vector<std::size_t> rest;
+            std::set_difference(selected.begin(), selected.end(), written.begin(), written.end(),
+                                std::back_inserter(rest));
+            selected = std::move(rest);
+        }
+        if (selected.empty()) return 0;
+    }
     DeviceSession session(command.builder.device);
     // A dynamic scene is rebuilt every frame: the ladder's fastest frame; one frame: the best tree.
-    const std::unique_ptr<TreeBuilder> builder =
-        make_tree_builder(command.builder.builder,
-                          command.builder.build_params(selected.size() > 1 ? kAnimationBuildQuality
-                                                                           : kStaticBuildQuality),
-                          session);
+    // Decided by the inputs, not the selection: a --frames range, a shard or a resumed run
+    // builds the trees the whole run builds.
+    const BuildQuality default_quality =
+        inputs.size() > 1 ? kAnimationBuildQuality : kStaticBuildQuality;
+    const std::unique_ptr<TreeBuilder> builder = make_tree_builder(
+        command.builder.builder, command.builder.build_params(default_quality), session);
     const std::unique_ptr<Tracer> tracer = make_tracer(command.tracer, command.threads, session);
     // The builder's programs are built in the first frame (its compile_ms), not here.
-    FramePipeline pipeline(*builder, *tracer, settings, frame_options(command));
-    const std::filesystem::path out_dir = command.output_dir;
+    FramePipeline pipeline(*builder, *tracer, settings, frame_options(command, output_name));
     create_output_dir(out_dir);
-    const bool progress = !command.quiet && ::isatty(STDERR_FILENO);
+    const bool progress = !command.quiet && stderr_is_terminal();
+    ProgressLine progress_line;
+    announce_kernel_compiles();
     // A closed terminal or a killed ssh session (SIGHUP) stops the run as Ctrl-C does.
     for (const int signal : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal, on_interrupt);
 
@@ -183,6 +291,9 @@ int run_render(const RenderCommand& command) {
         });
     };
     std::future<LoadedScene> next_scene = load_async(selected[0]);
+    // Without a camera in the render file, every run into a folder frames the scene of the first
+    // input: a resumed run, a --frames range or a shard sees what a whole run sees.
+    if (!settings.camera_given && selected[0] != 0) pipeline.frame_on(load_obj(inputs[0]));
     const double setup_ms = ms_since(setup_start);
 
     double warm_up_ms = 0;
@@ -202,6 +313,11 @@ int run_render(const RenderCommand& command) {
     }
 
     nlohmann::json frames = nlohmann::json::array(), failures = nlohmann::json::array();
+    std::string effects_said;  // the effects the log last named
+    const std::string builder_quality =
+        command.builder.builder == "opencl"
+            ? build_quality_of(command.builder.build_params(default_quality))
+            : std::string("exact (reference)");
     auto run_start = FrameClock::now();
     std::size_t done = 0;
     for (; done < selected.size() && !interrupted; ++done) {
@@ -217,28 +333,53 @@ int run_render(const RenderCommand& command) {
             if (!compute_on_host) load_next();
             auto [scene, load_ms] = pending.get();
             const double load_wait_ms = ms_since(frame_start);
+            if (effects_said.empty()) {
+                // Once, when the first scene is in: the device is open, the effects known.
+                effects_said = effects_text(decide_effects(scene, pipeline.settings()).to_json());
+                spdlog::info(
+                    "rendering {} frame(s) into {}: builder {} (quality {}), tracer {}; "
+                    "effects: {}",
+                    selected.size(), out_dir.string(), builder->description(), builder_quality,
+                    tracer->name(), effects_said);
+            }
             frames.push_back(
                 pipeline.render_frame({i, inputs[i], &scene, load_ms, load_wait_ms, frame_start},
                                       FramePipeline::Output::Write, load_next));
-            for (const std::string& warning : scene.warnings)
-                std::cerr << "kdray: warning: " << warning << "\n";
+            for (const std::string& warning : scene.warnings) spdlog::warn("{}", warning);
             for (const auto& warning :
                  frames.back()["tree"].value("warnings", nlohmann::json::array()))
-                std::cerr << "kdray: warning: " << inputs[i] << ": " << warning.get<std::string>()
-                          << "\n";
+                spdlog::warn("{}: {}", inputs[i], warning.get<std::string>());
+            const nlohmann::json& record = frames.back();
+            if (const std::string text = effects_text(record["effects"]); text != effects_said) {
+                spdlog::info("frame {}: effects now: {}", i, text);
+                effects_said = text;
+            }
+            const double frame_ms = record["frame_ms"].get<double>();
+            if (!progress)
+                spdlog::info(
+                    "frame {} ({}/{}, {}): {:.1f} ms ({:.2f} fps): build {:.1f}, trace "
+                    "{:.1f}{}",
+                    i, done + 1, selected.size(), inputs[i], frame_ms,
+                    frame_ms > 0 ? 1000.0 / frame_ms : 0.0, record["build_ms"].get<double>(),
+                    record["trace_ms"].get<double>(),
+                    record["compile_ms"].get<double>() > 0.5
+                        ? fmt::format(", compile {:.0f}", record["compile_ms"].get<double>())
+                        : std::string());
         } catch (const Error& e) {
             // Without --keep-going the first bad frame ends the run; the frames before it
             // are complete, and stats.json below records them.
             if (!command.keep_going && frames.empty()) throw;
             failures.push_back({{"frame", i}, {"input", inputs[i]}, {"error", e.what()}});
-            std::cerr << "kdray: error: " << e.what() << "\n";
+            spdlog::error("{}", e.what());
             if (!command.keep_going) break;
         }
-        if (progress) show_progress(done + 1, selected.size(), ms_since(run_start));
+        if (progress) progress_line.show(done + 1, selected.size(), ms_since(run_start));
     }
+    progress_line.finish();
 
-    nlohmann::json stats = {
+    nlohmann::json run = {
         {"kdray_version", kVersion},
+        {"name", output_name.pattern()},
         {"builder", builder->description()},
         {"tracer", tracer->name()},
         {"render_file", command.render_file},
@@ -249,12 +390,17 @@ int run_render(const RenderCommand& command) {
         {"packets_requested", command.packets},  // each frame's "packets": what ran
         // Before the first frame: the inputs checked, the device opened, the first load started.
         {"setup_ms", setup_ms},
-        {"frames", frames},
-        {"summary", summarise_frames(frames)}};
-    if (command.warm_up) stats["warm_up_ms"] = warm_up_ms;
-    if (!failures.empty()) stats["failed_frames"] = failures;
-    if (interrupted) stats["interrupted_after_frames"] = frames.size();
-    if (!frames.empty()) write_file_atomically(out_dir / "stats.json", json_text(stats) + "\n");
+        {"frames", frames}};
+    if (command.warm_up) run["warm_up_ms"] = warm_up_ms;
+    if (!failures.empty()) run["failed_frames"] = failures;
+    if (interrupted) run["interrupted_after_frames"] = frames.size();
+    if (!frames.empty()) {
+        // Merged into what earlier runs into the folder wrote, under the folder's lock.
+        const StatsLock lock(out_dir);
+        const nlohmann::json merged =
+            merge_render_stats(existing_stats(out_dir / "stats.json"), std::move(run));
+        write_file_atomically(out_dir / "stats.json", json_text(merged) + "\n");
+    }
 
     if (interrupted) {
         std::cerr << "kdray: interrupted: " << frames.size() << " frame(s) complete in "

@@ -12,6 +12,7 @@
 #include "cli/report.h"
 #include "core/error.h"
 #include "core/input_file.h"
+#include "core/render_stats.h"
 #include "core/scene.h"
 #include "core/stats_json.h"
 #include "core/tree_file.h"
@@ -37,39 +38,18 @@ nlohmann::json defaults_json(const BuilderOptions& o) {
             {"max_depth", p.max_depth}};
 }
 
-nlohmann::json read_render_stats(const std::filesystem::path& dir) {
+/// A render folder's stats.json, read and checked.
+nlohmann::json read_folder_stats(const std::filesystem::path& dir) {
     const std::filesystem::path file = dir / "stats.json";
     std::error_code ec;
     if (!std::filesystem::exists(file, ec))
         throw Error(dir.string() + ": not a render output folder (no stats.json)");
-    nlohmann::json stats;
-    try {
-        stats = nlohmann::json::parse(read_input_file(file, "stats.json file"));
-    } catch (const nlohmann::json::exception& e) {
-        throw Error(file.string() + ": malformed JSON: " + e.what());
-    }
-    if (!stats.is_object() || !stats.contains("summary") || !stats.contains("frames") ||
-        !stats["frames"].is_array())
-        throw Error(file.string() + ": not a kdray stats file (no summary or frames)");
-    // What the summary reads must be what kdray writes: a frame number that is a count, times
-    // that are numbers.
-    for (std::size_t k = 0; k < stats["frames"].size(); ++k) {
-        const nlohmann::json& frame = stats["frames"][k];
-        const std::string where = file.string() + ": frames[" + std::to_string(k) + "]";
-        if (!frame.is_object()) throw Error(where + " is not an object");
-        if (frame.contains("frame") && !frame["frame"].is_number_unsigned())
-            throw Error(where + ".frame is " + frame["frame"].dump() + ", not a frame number");
-        for (const char* key : {"frame_ms", "load_ms", "load_wait_ms", "compile_ms", "build_ms",
-                                "trace_ms", "write_ms", "other_ms"})
-            if (frame.contains(key) && !frame[key].is_number())
-                throw Error(where + "." + key + " is " + frame[key].dump() + ", not a number");
-    }
-    return stats;
+    return read_render_stats(file);
 }
 
 nlohmann::json render_folder_json(const std::filesystem::path& dir) {
-    nlohmann::json stats = read_render_stats(dir);
-    nlohmann::json j = summarise_frames(stats["frames"]);
+    nlohmann::json stats = read_folder_stats(dir);
+    nlohmann::json j = summarise_runs(frames_by_run(stats["frames"]));
     j["folder"] = dir.string();
     j["builder"] = stats.value("builder", "");
     j["tracer"] = stats.value("tracer", "");
@@ -109,7 +89,8 @@ int run_stats(const StatsCommand& command) {
         std::vector<nlohmann::json> runs;
         for (const std::string& path : command.paths)
             if (std::filesystem::is_directory(path))
-                runs.push_back(read_render_stats(path)["frames"]);
+                for (nlohmann::json& run : frames_by_run(read_folder_stats(path)["frames"]))
+                    runs.push_back(std::move(run));
         if (runs.size() > 1) out["combined"] = summarise_runs(runs);
     }
     if (command.json) {

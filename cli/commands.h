@@ -38,11 +38,14 @@ struct RenderCommand {
     std::vector<std::string> inputs;
     std::string output_dir;
     std::string render_file;
-    // Overrides of the render file: image.spp, image.width x image.height, max_depth.
+    // Overrides of the render file: image.spp, image.width x image.height, max_depth, exposure.
     std::optional<int> spp, ray_depth;
+    std::optional<double> exposure;
     std::string size;  // WIDTHxHEIGHT
     bool aov = false;
     std::string format = "png";
+    std::string name = "{stem}";  // a frame's file names (core/output_name.h)
+    bool skip_existing = false;   // render only the frames whose files are missing
     std::string tracer = "opencl";
     int threads = 0;
     bool quiet = false;

@@ -11,10 +11,12 @@
 #include <exception>
 #include <iostream>
 #include <new>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/log.h"
 #include "core/error.h"
 #include "core/version.h"
 
@@ -138,6 +140,14 @@ int main(int argc, char** argv) {
     CLI::App app{"kdray: kd-trees built on an OpenCL device (Zhou et al. 2008), ray traced"};
     app.require_subcommand(1);
     app.set_version_flag("--version", std::string("kdray ") + kdray::kVersion);
+    init_logging("info");
+    std::optional<std::string> log_level;
+    app.add_option("--log-level", log_level,
+                   "quiet (warnings and errors), info (what happens: device, compiles, one line "
+                   "per frame off a terminal) or debug; default info")
+        ->check(CLI::IsMember({"quiet", "info", "debug"}));
+    // --log-level after the command too: `kdray render ... --log-level debug`.
+    app.fallthrough();
 
     BuildCommand build;
     auto* build_app = app.add_subcommand("build", "Build a kd-tree and print its statistics");
@@ -167,8 +177,19 @@ int main(int argc, char** argv) {
         ->add_option("--ray-depth", render.ray_depth,
                      "most bounces of a path: the render file's max_depth (overrides it)")
         ->check(CLI::Range(1, 1024));
+    render_app->add_option("--exposure", render.exposure,
+                           "in stops: radiance x 2^STOPS before the image is written, from -64 to "
+                           "64 (overrides the render file)");
     render_app->option_defaults()->group("Output");
     render_app->add_option("-o,--output", render.output_dir, "output folder")->required();
+    render_app
+        ->add_option("--name", render.name,
+                     "a frame's file names, from {stem} (the OBJ's name), {frame} and "
+                     "{frame:04} (its number, zero-padded), e.g. frame_{frame:04}")
+        ->capture_default_str();
+    render_app->add_flag("--skip-existing", render.skip_existing,
+                         "render only the frames whose image (and AOV) are not in the folder yet; "
+                         "stats.json keeps the earlier runs' records of the others");
     render_app->add_flag("--aov", render.aov, "also write <stem>.aov.exr (Z, prim_id, N)");
     render_app->add_option("--format", render.format, "image format")
         ->check(CLI::IsMember({"png", "exr"}))
@@ -181,7 +202,8 @@ int main(int argc, char** argv) {
         ->add_option("--threads", render.threads, "CPU threads for the reference tracer (0: all)")
         ->check(CLI::NonNegativeNumber);
     render_app->option_defaults()->group("Output");
-    render_app->add_flag("-q,--quiet", render.quiet, "no progress line");
+    render_app->add_flag("-q,--quiet", render.quiet,
+                         "no progress line, and only warnings and errors (unless --log-level)");
     render_app->add_flag("--keep-going", render.keep_going,
                          "after a bad frame, render the rest; exit 1 with the failed frames "
                          "listed (default: stop at the first bad frame)");
@@ -247,6 +269,8 @@ int main(int argc, char** argv) {
                   << " (see kdray --help)\n";
         return 2;
     }
+
+    init_logging(log_level.value_or(*render_app && render.quiet ? "quiet" : "info"));
 
     for (const BuilderOptions* o : {&build.builder, &render.builder, &stats.builder})
         if (!o->retired_max_depth.empty()) {

@@ -20,15 +20,25 @@ FramePipeline::FramePipeline(TreeBuilder& builder, Tracer& tracer, RenderSetting
       settings_(std::move(settings)),
       options_(std::move(options)) {}
 
+void FramePipeline::frame_on(const Scene& scene) {
+    if (settings_.camera_given) return;
+    settings_.camera_keys = {
+        CameraKey{0, in_scene_units(frame_bounds(scene.bounds()), scene.frame)}};
+    framed_ = true;
+}
+
 nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
                                            const std::function<void()>& computed) {
     if (!job.scene) throw Error(job.input + ": render_frame without a scene");
     const Scene& scene = *job.scene;
     // Choose the camera: the render file's at this frame, else the first completed frame's view,
     // kept in the scene's units: each frame of an animation has a frame of its own.
-    if (!settings_.camera_given && written_ == 0)
-        settings_.camera_keys = {
-            CameraKey{0, in_scene_units(frame_bounds(scene.bounds()), scene.frame)}};
+    if (!settings_.camera_given && !framed_) {
+        frame_on(scene);
+        // A warm-up's framing is the run's first frame's too, but it is only kept once a frame
+        // is written: until then every frame frames its own scene.
+        framed_ = output == Output::Write;
+    }
     const Camera camera = settings_.camera_at(int(job.number), scene.frame);
 
     // Prepare, build, then trace: the programs that the builder and the tracer for these effects
@@ -52,7 +62,7 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
     if (computed) computed();
 
     // Write the image and the AOV, each whole or not at all.
-    const std::string stem = std::filesystem::path(job.input).stem().string();
+    const std::string stem = options_.name(job.input, job.number);
     const std::filesystem::path image_path = options_.out_dir / (stem + "." + options_.format);
     const std::filesystem::path aov_path = options_.out_dir / (stem + ".aov.exr");
     const auto write_start = FrameClock::now();
@@ -67,7 +77,6 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
             std::filesystem::remove(image_path, ignored);
             throw;
         }
-        ++written_;
     }
     const double write_ms = output == Output::Write ? ms_since(write_start) : 0.0;
 

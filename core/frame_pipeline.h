@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/camera.h"
+#include "core/output_name.h"
 #include "core/render_file.h"
 #include "core/render_setup.h"
 #include "core/scene.h"
@@ -35,6 +36,7 @@ double ms_since(FrameClock::time_point start);
 struct FrameOptions {
     std::filesystem::path out_dir;
     std::string format = "png";  // the image's format and extension: png or exr
+    OutputName name;             // a frame's files: NAME.png (or .exr) and NAME.aov.exr
     bool aov = false;            // also <stem>.aov.exr; the hits then carry their normals
     kd_u32 intersect = KDRAY_INTERSECT_WATERTIGHT;  // KDRAY_INTERSECT_*
     RenderInputs::Packets packets = RenderInputs::Packets::Auto;
@@ -67,10 +69,15 @@ class FramePipeline {
     /// stats.json record. The builder and the tracer are prepared (their programs built, the
     /// first frame's compile_ms) outside build_ms and trace_ms. `computed`, when given, runs once
     /// the build and the trace are done, before the files are written. Without a camera in the
-    /// render file, frames are framed on the scene of the first frame that completes (Write).
+    /// render file, frames are framed on the scene of the first frame rendered with Write
+    /// (unless frame_on chose another).
     /// Throws Error from any stage.
     nlohmann::json render_frame(const FrameJob& job, Output output = Output::Write,
                                 const std::function<void()>& computed = {});
+
+    /// Without a camera in the render file: frames every later frame on `scene`'s view (kept in
+    /// its units). Unless it is called, the first frame rendered with Output::Write is framed.
+    void frame_on(const Scene& scene);
 
     const RenderSettings& settings() const { return settings_; }
 
@@ -79,7 +86,7 @@ class FramePipeline {
     Tracer& tracer_;
     RenderSettings settings_;
     FrameOptions options_;
-    std::size_t written_ = 0;  // frames completed with Output::Write
+    bool framed_ = false;  // the camera keys hold a framing (frame_on)
 };
 
 }  // namespace kdray

@@ -10,7 +10,7 @@ packages=(
     build-essential cmake pkg-config python3
     pocl-opencl-icd ocl-icd-opencl-dev opencl-clhpp-headers clinfo
     libopenimageio-dev openimageio-tools
-    libtinyobjloader-dev libcli11-dev nlohmann-json3-dev doctest-dev
+    libtinyobjloader-dev libcli11-dev nlohmann-json3-dev doctest-dev libspdlog-dev
 )
 for option in "$@"; do
     case "$option" in

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "core/image.h"
 #include "core/kd_shared.h"
 #include "core/math.h"
@@ -82,6 +84,10 @@ CommandResult run_kdray(const std::vector<std::string>& args, int timeout_s = 0)
 
 /// A fresh, empty folder for one test, under the system's temporary folder.
 std::filesystem::path fresh_temp_dir(const std::string& name);
+
+/// The bytes of `path` ("" when it cannot be read), and the file parsed as JSON.
+std::string read_file(const std::filesystem::path& path);
+nlohmann::json read_json(const std::filesystem::path& path);
 
 /// Writes `text` to `path` (creating parent folders) and returns the path.
 std::filesystem::path write_text_file(const std::filesystem::path& path, const std::string& text);

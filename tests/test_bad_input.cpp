@@ -63,11 +63,6 @@ CommandResult render(const fs::path& obj, const fs::path& out, const fs::path& c
     return run_kdray(args);
 }
 
-nlohmann::json read_json(const fs::path& path) {
-    std::ifstream in(path);
-    return nlohmann::json::parse(in);
-}
-
 }  // namespace
 
 TEST_CASE("bad OBJ files: one error line naming the file and the problem, nothing written") {

@@ -30,16 +30,6 @@ using namespace kdray::test;
 
 namespace {
 
-std::string read_file(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-nlohmann::json read_json(const fs::path& path) {
-    std::ifstream in(path);
-    return nlohmann::json::parse(in);
-}
-
 /// The parts of every frame's time in `stats` add up to its frame_ms (the remainder, other_ms,
 /// small), none negative; and the summary's rates are those of the frames' own frame_ms:
 /// frames_per_second_after_first over frames 2..n only.

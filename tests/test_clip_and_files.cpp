@@ -13,22 +13,19 @@
 
 #define KDRAY_CLIP_REAL double
 #include "core/kd_clip.h"
+#include "tests/support.h"
 
 namespace kdray {
 namespace {
 
 namespace fs = std::filesystem;
+using test::read_file;
 
 fs::path fresh_dir(const std::string& name) {
     const fs::path dir = fs::temp_directory_path() / ("kdray_test_" + name);
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;
-}
-
-std::string read_file(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 }  // namespace

@@ -46,11 +46,6 @@ CommandResult render(const fs::path& obj, const fs::path& out, const fs::path& c
     return run_kdray(args, kNoHang);
 }
 
-std::string read_file(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 }  // namespace
 
 TEST_CASE("inputs that are not regular files are refused at once, never read or waited on") {

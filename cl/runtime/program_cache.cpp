@@ -5,6 +5,7 @@
 #include <map>
 #include <mutex>
 #include <tuple>
+#include <utility>
 
 #include "cl/runtime/cl_error.h"
 #include "cl/runtime/embedded_kernels.h"
@@ -21,6 +22,7 @@ int builds = 0;
 // compile_ms_total: its own lock, since cached_program holds cache_mutex while it builds.
 std::mutex compile_mutex;
 double compile_ms = 0;
+std::function<void(const ProgramBuildEvent&)> build_listener;  // under cache_mutex
 
 }  // namespace
 
@@ -33,14 +35,16 @@ cl::Program cached_program(const ClDevice& device, std::string_view file,
 
     const std::string what = "building OpenCL program " + std::string(file);
     const std::string_view source = embedded_kernel_source(file);
+    if (build_listener) build_listener({std::string(file), device.info().name, false, 0});
     const auto start = std::chrono::steady_clock::now();
     cl::Program program =
         with_cl_context(what, [&] { return cl::Program(device.context(), std::string(source)); });
     const cl_device_id id = device.device()();
     const cl_int status = clBuildProgram(program(), 1, &id, options.c_str(), nullptr, nullptr);
-    add_compile_ms(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count());
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    add_compile_ms(ms);
+    if (build_listener) build_listener({std::string(file), device.info().name, true, ms});
     if (status != CL_SUCCESS) {
         std::string log;
         try {
@@ -75,6 +79,11 @@ std::shared_ptr<void> detail::cached_object(const ClDevice& device, const std::s
     std::shared_ptr<void> object = make();
     objects.emplace(std::move(object_key), object);
     return object;
+}
+
+void set_program_build_listener(std::function<void(const ProgramBuildEvent&)> listener) {
+    std::lock_guard<std::mutex> lock(cache_mutex);
+    build_listener = std::move(listener);
 }
 
 int program_build_count() {

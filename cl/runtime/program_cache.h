@@ -23,6 +23,18 @@ namespace kdray {
 cl::Program cached_program(const ClDevice& device, std::string_view file,
                            const std::string& defines = "");
 
+/// What the cache tells its listener: a program's build starting (done false) or ended (done
+/// true, after ms milliseconds, failed or not).
+struct ProgramBuildEvent {
+    std::string file, device;
+    bool done = false;
+    double ms = 0;
+};
+/// The one listener of the process (empty: none), told of every build cached_program starts and
+/// ends, so that a command line can say why its first frame takes seconds. Called on the
+/// building thread, with the cache locked: it must not build programs itself.
+void set_program_build_listener(std::function<void(const ProgramBuildEvent&)> listener);
+
 /// Kernel `name` of `program`; throws Error naming the kernel when it does not exist.
 cl::Kernel make_kernel(const cl::Program& program, const char* name);
 

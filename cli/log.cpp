@@ -1,0 +1,87 @@
+#include "cli/log.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <memory>
+#include <mutex>
+
+#include <spdlog/details/null_mutex.h>
+#include <spdlog/sinks/base_sink.h>
+
+namespace kdray::cli {
+namespace {
+
+// One lock for the sink and the progress line: a message and a redraw never interleave.
+std::mutex stderr_mutex;
+std::string progress_text;  // what the progress line shows now; empty when none is shown
+
+const char* prefix(spdlog::level::level_enum level) {
+    switch (level) {
+        case spdlog::level::warn:
+            return "kdray: warning: ";
+        case spdlog::level::err:
+        case spdlog::level::critical:
+            return "kdray: error: ";
+        case spdlog::level::debug:
+        case spdlog::level::trace:
+            return "kdray: debug: ";
+        default:
+            return "kdray: ";
+    }
+}
+
+/// stderr, unbuffered, one whole line a message, around the progress line.
+class StderrSink final : public spdlog::sinks::base_sink<spdlog::details::null_mutex> {
+  protected:
+    void sink_it_(const spdlog::details::log_msg& msg) override {
+        std::lock_guard<std::mutex> lock(stderr_mutex);
+        // "\r\033[K": back to the start of the progress line and clear it.
+        if (!progress_text.empty()) std::fputs("\r\033[K", stderr);
+        std::fputs(prefix(msg.level), stderr);
+        std::fwrite(msg.payload.data(), 1, msg.payload.size(), stderr);
+        std::fputc('\n', stderr);
+        if (!progress_text.empty()) std::fputs(progress_text.c_str(), stderr);
+        std::fflush(stderr);
+    }
+    void flush_() override { std::fflush(stderr); }
+};
+
+}  // namespace
+
+void init_logging(const std::string& level) {
+    static const std::shared_ptr<spdlog::logger> logger = [] {
+        auto made = std::make_shared<spdlog::logger>("kdray", std::make_shared<StderrSink>());
+        spdlog::set_default_logger(made);
+        return made;
+    }();
+    logger->set_level(level == "debug"   ? spdlog::level::debug
+                      : level == "quiet" ? spdlog::level::warn
+                                         : spdlog::level::info);
+}
+
+bool stderr_is_terminal() {
+    return ::isatty(STDERR_FILENO) == 1;
+}
+
+void ProgressLine::show(std::size_t done, std::size_t total, double elapsed_ms) {
+    const double fps = elapsed_ms > 0 ? 1000.0 * double(done) / elapsed_ms : 0.0;
+    const double eta_s = fps > 0 ? double(total - done) / fps : 0.0;
+    char text[128];
+    std::snprintf(text, sizeof text, "kdray: frame %zu/%zu  %.2f fps  ETA %.0f s", done, total, fps,
+                  eta_s);
+    std::lock_guard<std::mutex> lock(stderr_mutex);
+    progress_text = text;
+    std::fprintf(stderr, "\r\033[K%s", text);
+    std::fflush(stderr);
+}
+
+void ProgressLine::finish() {
+    std::lock_guard<std::mutex> lock(stderr_mutex);
+    if (progress_text.empty()) return;
+    progress_text.clear();
+    std::fputc('\n', stderr);
+    std::fflush(stderr);
+}
+
+}  // namespace kdray::cli

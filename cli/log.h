@@ -1,0 +1,31 @@
+// log.h — kdray's messages on stderr, through spdlog: "kdray: ..." at info, "kdray: warning: ...",
+// "kdray: error: ..." and "kdray: debug: ...". The progress line a terminal shows is cleared
+// before a message and drawn again after it, so that the two never share a line.
+#pragma once
+
+#include <string>
+
+#include <spdlog/spdlog.h>
+
+namespace kdray::cli {
+
+/// Makes spdlog's default logger kdray's stderr logger at `level`, one of --log-level's: quiet
+/// (warnings and errors only), info or debug. Safe to call again: main sets info before it parses
+/// the command line.
+void init_logging(const std::string& level);
+
+/// Whether stderr is a terminal: the progress line is drawn only there; elsewhere (a file, a
+/// Slurm job's log) a frame is one plain info line.
+bool stderr_is_terminal();
+
+/// The progress line on a terminal, rewritten in place: frame i/n, frames per second, time
+/// left. Messages logged while it is shown appear above it.
+class ProgressLine {
+  public:
+    void show(std::size_t done, std::size_t total, double elapsed_ms);
+    /// Ends the line (a newline) so that what follows starts on a line of its own.
+    void finish();
+    ~ProgressLine() { finish(); }
+};
+
+}  // namespace kdray::cli

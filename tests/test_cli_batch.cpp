@@ -1,0 +1,305 @@
+// test_cli_batch.cpp — `kdray render` as a batch user runs it: --exposure against the render
+// file's own exposure, --name patterns, a folder's stats.json merged across runs (an interrupted
+// run resumed, --skip-existing) against one whole run, and the log a run writes when stderr is
+// not a terminal. Every case that renders runs on the default OpenCL path and on the reference.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <future>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/error.h"
+#include "core/output_name.h"
+#include "core/render_stats.h"
+#include "tests/support.h"
+
+namespace fs = std::filesystem;
+using namespace kdray;
+using namespace kdray::test;
+
+namespace {
+
+/// The first `n` frames of testdata/anim.
+std::vector<std::string> anim_frames(int n) {
+    std::vector<std::string> frames;
+    for (int i = 0; i < n; ++i) {
+        char name[32];
+        std::snprintf(name, sizeof name, "frame_%03d.obj", i);
+        frames.push_back((source_dir() / "testdata" / "anim" / name).string());
+    }
+    return frames;
+}
+
+/// `kdray render FRAMES -o OUT --size 48x36 EXTRA...` on `path` ("opencl" or "reference").
+CommandResult render(const std::vector<std::string>& frames, const fs::path& out,
+                     const std::string& path, std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {"render"};
+    args.insert(args.end(), frames.begin(), frames.end());
+    for (const std::string& a :
+         {std::string("-o"), out.string(), std::string("--size"), std::string("48x36"),
+          std::string("--builder"), path, std::string("--tracer"), path})
+        args.push_back(a);
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_kdray(args, 300);
+}
+
+std::size_t count_lines_with(const std::string& text, const std::string& part) {
+    std::size_t n = 0;
+    for (std::size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1))
+        ++n;
+    return n;
+}
+
+/// The parts of a frame's record that do not depend on when or how fast it ran.
+nlohmann::json timeless(const nlohmann::json& frame) {
+    return {{"frame", frame["frame"]},
+            {"input", frame["input"]},
+            {"image", frame["image"]},
+            {"nodes", frame["tree"]["nodes"]},
+            {"sah_cost", frame["tree"]["sah_cost"]},
+            {"hit_pixels", frame["hit_pixels"]},
+            {"rays", frame["rays"]}};
+}
+
+}  // namespace
+
+TEST_CASE("--name: placeholders expand, bad patterns are usage errors naming the pattern") {
+    CHECK(OutputName()("dir/frame_7.obj", 7) == "frame_7");
+    CHECK(OutputName("f_{frame:04}")("a/b.obj", 12) == "f_0012");
+    CHECK(OutputName("{stem}_{frame}")("x.obj", 3) == "x_3");
+    CHECK(OutputName("f_{frame:02}")("x.obj", 1234) == "f_1234");
+    for (const char* bad : {"{frame", "a}b", "{nope}", "a/{stem}", "", "{frame:0}", "{frame:4}"})
+        CHECK_THROWS_AS(OutputName{bad}, UsageError);
+    try {
+        OutputName{"x_{fram}"};
+    } catch (const UsageError& e) {
+        CHECK(std::string(e.what()).find("x_{fram}") != std::string::npos);
+        CHECK(std::string(e.what()).find("{fram}") != std::string::npos);
+    }
+}
+
+TEST_CASE("merge_render_stats: a run replaces its frames' records and keeps the others") {
+    auto record = [](std::size_t frame, double ms) {
+        return nlohmann::json{{"frame", frame}, {"frame_ms", ms}, {"build_ms", ms / 2}};
+    };
+    // A stats.json of one run, as kdray wrote it before runs were recorded: frames 0..3.
+    nlohmann::json old = {{"builder", "old"},
+                          {"frames", {record(0, 100), record(1, 10), record(2, 10), record(3, 10)}},
+                          {"failed_frames", {{{"frame", 5}, {"error", "bad"}}}},
+                          {"summary", nlohmann::json::object()}};
+    // A second run re-renders frames 2 and 5 and fails frame 3.
+    nlohmann::json run = {{"builder", "new"},
+                          {"frames", {record(2, 200), record(5, 20)}},
+                          {"failed_frames", {{{"frame", 3}, {"error", "worse"}}}}};
+    const nlohmann::json merged = merge_render_stats(old, run);
+    CHECK(merged["builder"] == "new");
+    REQUIRE(merged["runs"].size() == 2);
+    CHECK(merged["runs"][0]["builder"] == "old");
+    CHECK(merged["runs"][1]["frames_rendered"] == nlohmann::json({2, 5}));
+    std::vector<std::size_t> numbers, runs;
+    for (const auto& f : merged["frames"]) {
+        numbers.push_back(f["frame"]);
+        runs.push_back(f["run"]);
+    }
+    CHECK(numbers == std::vector<std::size_t>{0, 1, 2, 5});
+    CHECK(runs == std::vector<std::size_t>{0, 0, 1, 1});
+    CHECK(merged["frames"][2]["frame_ms"] == 200.0);
+    REQUIRE(merged["failed_frames"].size() == 1);
+    CHECK(merged["failed_frames"][0]["frame"] == 3);
+    // The summary by hand: 4 frames of 100, 10, 200, 20 ms; each run's first (0 and 2) left out
+    // of the rate after the first.
+    const nlohmann::json& summary = merged["summary"];
+    CHECK(summary["frames"] == 4);
+    CHECK(summary["mean_frame_ms"].get<double>() == doctest::Approx(82.5));
+    CHECK(summary["worst_frame_ms"].get<double>() == doctest::Approx(200));
+    CHECK(summary["frames_per_second_after_first"].get<double>() == doctest::Approx(1000.0 / 15));
+    CHECK(summary["mean_build_ms"].get<double>() == doctest::Approx(41.25));
+    // Merging into nothing is the run alone.
+    const nlohmann::json alone = merge_render_stats(nullptr, run);
+    CHECK(alone["frames"].size() == 2);
+    CHECK(alone["runs"].size() == 1);
+}
+
+TEST_CASE("--exposure overrides the render file's exposure, recorded in stats.json") {
+    const fs::path dir = fresh_temp_dir("cli-exposure");
+    const fs::path obj = source_dir() / "testdata" / "cornell" / "room.obj";
+    REQUIRE(fs::exists(obj));
+    const fs::path base_json = source_dir() / "testdata" / "cornell" / "render.json";
+    nlohmann::json with_exposure = read_json(base_json);
+    with_exposure["exposure"] = 1.5;
+    const fs::path exposed_json = write_text_file(dir / "exposed.json", with_exposure.dump());
+    for (const std::string path : {"opencl", "reference"}) {
+        CAPTURE(path);
+        const CommandResult a = render({obj.string()}, dir / (path + "-file"), path,
+                                       {"--camera", exposed_json.string(), "-q"});
+        const CommandResult b = render({obj.string()}, dir / (path + "-flag"), path,
+                                       {"--camera", base_json.string(), "--exposure", "1.5", "-q"});
+        REQUIRE(a.status == 0);
+        REQUIRE(b.status == 0);
+        const std::string image_a = read_file(dir / (path + "-file") / "room.png");
+        CHECK(!image_a.empty());
+        CHECK(image_a == read_file(dir / (path + "-flag") / "room.png"));
+        // Not the unexposed image: the override did something.
+        const CommandResult c = render({obj.string()}, dir / (path + "-none"), path,
+                                       {"--camera", base_json.string(), "-q"});
+        REQUIRE(c.status == 0);
+        CHECK(image_a != read_file(dir / (path + "-none") / "room.png"));
+        CHECK(read_json(dir / (path + "-flag") / "stats.json")["overrides"]["exposure"] == 1.5);
+    }
+    const CommandResult bad =
+        render({obj.string()}, dir / "bad", "reference", {"--exposure", "65"});
+    CHECK(bad.status == 2);
+    CHECK(bad.err.find("--exposure") != std::string::npos);
+    CHECK(!fs::exists(dir / "bad"));
+}
+
+TEST_CASE("--name writes numbered files; a pattern that makes two frames one name is refused") {
+    const fs::path dir = fresh_temp_dir("cli-name");
+    const std::vector<std::string> frames = anim_frames(3);
+    const CommandResult r =
+        render(frames, dir / "out", "reference", {"--name", "shot_{frame:04}", "--aov", "-q"});
+    REQUIRE(r.status == 0);
+    for (const char* name :
+         {"shot_0000.png", "shot_0001.png", "shot_0002.png", "shot_0002.aov.exr"})
+        CHECK_MESSAGE(fs::exists(dir / "out" / name), name);
+    CHECK(!fs::exists(dir / "out" / "frame_000.png"));
+    CHECK(read_json(dir / "out" / "stats.json")["frames"][1]["image"] == "shot_0001.png");
+
+    const CommandResult same = render(frames, dir / "same", "reference", {"--name", "shot"});
+    CHECK(same.status == 2);
+    CHECK(same.err.find("frame_000.obj") != std::string::npos);
+    CHECK(same.err.find("frame_001.obj") != std::string::npos);
+    CHECK(!fs::exists(dir / "same"));
+    const CommandResult bad = render(frames, dir / "bad", "reference", {"--name", "a/{stem}"});
+    CHECK(bad.status == 2);
+    CHECK(bad.err.find("a/{stem}") != std::string::npos);
+}
+
+TEST_CASE("runs into one folder add up: an interrupted run resumed equals one whole run") {
+    for (const std::string path : {"opencl", "reference"}) {
+        CAPTURE(path);
+        const fs::path dir = fresh_temp_dir("cli-merge-" + path);
+        const std::vector<std::string> frames = anim_frames(4);
+        // No render file: every run frames the first input's scene, wherever it starts.
+        REQUIRE(render(frames, dir / "whole", path, {"-q"}).status == 0);
+        REQUIRE(render(frames, dir / "parts", path, {"--frames", "0:1", "-q"}).status == 0);
+        REQUIRE(render(frames, dir / "parts", path, {"--frames", "2:3", "-q"}).status == 0);
+        const nlohmann::json whole = read_json(dir / "whole" / "stats.json");
+        const nlohmann::json parts = read_json(dir / "parts" / "stats.json");
+        REQUIRE(parts["frames"].size() == 4);
+        CHECK(parts["runs"].size() == 2);
+        CHECK(parts["summary"]["frames"] == 4);
+        CHECK(parts["summary"]["frame_numbers"] == nlohmann::json({0, 1, 2, 3}));
+        for (std::size_t k = 0; k < 4; ++k) {
+            CHECK(timeless(parts["frames"][k]) == timeless(whole["frames"][k]));
+            CHECK(parts["frames"][k]["run"] == (k < 2 ? 0 : 1));
+            const std::string image = whole["frames"][k]["image"];
+            CHECK_MESSAGE(read_file(dir / "whole" / image) == read_file(dir / "parts" / image),
+                          image);
+        }
+
+        // --skip-existing renders only the frame whose image is gone, and keeps the others'
+        // records.
+        fs::remove(dir / "parts" / "frame_002.png");
+        const CommandResult skip =
+            render(frames, dir / "parts", path, {"--skip-existing", "--log-level", "info", "-q"});
+        REQUIRE(skip.status == 0);
+        CHECK(skip.err.find("skipping 3 of 4 frame(s)") != std::string::npos);
+        const nlohmann::json resumed = read_json(dir / "parts" / "stats.json");
+        REQUIRE(resumed["runs"].size() == 3);
+        CHECK(resumed["runs"][2]["frames_rendered"] == nlohmann::json({2}));
+        REQUIRE(resumed["frames"].size() == 4);
+        CHECK(resumed["frames"][2]["run"] == 2);
+        CHECK(resumed["frames"][1]["run"] == 0);
+        CHECK(timeless(resumed["frames"][2]) == timeless(whole["frames"][2]));
+        CHECK(read_file(dir / "parts" / "frame_002.png") ==
+              read_file(dir / "whole" / "frame_002.png"));
+        // Nothing left to render: the folder stays as it was.
+        const CommandResult none = render(frames, dir / "parts", path, {"--skip-existing", "-q"});
+        CHECK(none.status == 0);
+        CHECK(read_json(dir / "parts" / "stats.json")["runs"].size() == 3);
+    }
+}
+
+TEST_CASE("two shards finishing into one folder at once: stats.json holds both, merged") {
+    const fs::path dir = fresh_temp_dir("cli-merge-concurrent");
+    const std::vector<std::string> frames = anim_frames(6);
+    REQUIRE(render(frames, dir / "whole", "reference", {"-q"}).status == 0);
+    // Several rounds: the two merges race for the folder's lock each time.
+    for (int round = 0; round < 3; ++round) {
+        const fs::path out = dir / ("shards" + std::to_string(round));
+        auto shard = [&](const char* which) {
+            return std::async(std::launch::async, [&, which] {
+                return render(frames, out, "reference", {"--shard", which, "-q"});
+            });
+        };
+        auto first = shard("0/2"), second = shard("1/2");
+        REQUIRE(first.get().status == 0);
+        REQUIRE(second.get().status == 0);
+        const nlohmann::json merged = read_json(out / "stats.json");
+        CHECK(merged["runs"].size() == 2);
+        CHECK(merged["summary"]["frame_numbers"] == nlohmann::json({0, 1, 2, 3, 4, 5}));
+        const nlohmann::json whole = read_json(dir / "whole" / "stats.json");
+        for (std::size_t k = 0; k < 6; ++k)
+            CHECK(timeless(merged["frames"][k]) == timeless(whole["frames"][k]));
+    }
+}
+
+TEST_CASE("a folder whose stats.json cannot be merged into fails the run before it renders") {
+    const fs::path dir = fresh_temp_dir("cli-merge-bad");
+    write_text_file(dir / "out" / "stats.json", "{\"frames\": 3");
+    const CommandResult r = render(anim_frames(2), dir / "out", "reference", {"-q"});
+    CHECK(r.status == 1);
+    CHECK(r.err.rfind("kdray: error: ", 0) == 0);
+    CHECK(r.err.find("stats.json") != std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(!fs::exists(dir / "out" / "frame_000.png"));
+}
+
+TEST_CASE("off a terminal a run logs its device, its compiles and one plain line per frame") {
+    for (const std::string path : {"opencl", "reference"}) {
+        CAPTURE(path);
+        const fs::path dir = fresh_temp_dir("cli-log-" + path);
+        const CommandResult r = render(anim_frames(3), dir / "out", path);
+        REQUIRE(r.status == 0);
+        INFO("stderr: " << r.err);
+        // run_kdray's stderr is a pipe: no progress line, no carriage returns.
+        CHECK(r.err.find('\r') == std::string::npos);
+        CHECK(count_lines_with(r.err, "kdray: rendering 3 frame(s) into ") == 1);
+        CHECK(r.err.find("effects: ") != std::string::npos);
+        for (const char* line :
+             {"kdray: frame 0 (1/3, ", "kdray: frame 1 (2/3, ", "kdray: frame 2 (3/3, "})
+            CHECK_MESSAGE(count_lines_with(r.err, line) == 1, line);
+        CHECK(count_lines_with(r.err, " fps)") == 3);
+        if (path == "opencl") {
+            // The device is named, and why the first frame waits.
+            const nlohmann::json stats = read_json(dir / "out" / "stats.json");
+            const std::string builder = stats["builder"];
+            CHECK(r.err.find(builder) != std::string::npos);
+            CHECK(count_lines_with(r.err, "kdray: compiling OpenCL kernels for '") == 1);
+            CHECK(stats["frames"][0]["compile_ms"].get<double>() > 0);
+        } else {
+            CHECK(r.err.find("compiling") == std::string::npos);
+        }
+        // quiet: nothing but warnings and errors; debug: each program's build.
+        const CommandResult quiet =
+            render(anim_frames(2), dir / "quiet", path, {"--log-level", "quiet"});
+        CHECK(quiet.status == 0);
+        CHECK(quiet.err.empty());
+        const CommandResult q = render(anim_frames(2), dir / "q", path, {"-q"});
+        CHECK(q.err.empty());
+        if (path == "opencl") {
+            const CommandResult debug =
+                render(anim_frames(2), dir / "debug", path, {"--log-level", "debug"});
+            CHECK(debug.status == 0);
+            CHECK(debug.err.find("kdray: debug: built ") != std::string::npos);
+        }
+    }
+    const CommandResult bad = run_kdray({"render", "x.obj", "-o", "o", "--log-level", "loud"});
+    CHECK(bad.status == 2);
+    CHECK(bad.err.find("--log-level") != std::string::npos);
+}
