@@ -14,6 +14,11 @@
 namespace kdray {
 namespace {
 
+/// The most triangulation work a file may ask for: the sum of n^2 over its faces of n > 4
+/// vertices. 2^28 is one face of 16384 vertices, ~2 s of tinyobjloader's ear clipping
+/// (4096 vertices took 125 ms, 16384 about 16 times that).
+constexpr double kPolygonWorkBudget = double(1 << 28);
+
 constexpr bool is_blank(char c) {
     return c == ' ' || c == '\t';
 }
@@ -207,6 +212,17 @@ class ObjScanner {
             fail("face has " + std::to_string(count) + " vertices; a face needs at least 3");
         ++result_.faces;
         result_.triangles += count - 2;
+        // tinyobjloader clips the ears of a polygon of more than 4 vertices in time that grows
+        // with the square of its size (or worse): one face of 100,000 vertices took 20 s. The
+        // square of every such face is budgeted, so that no file triangulates for long.
+        if (count > 4) {
+            polygon_work_ += double(count) * double(count);
+            if (polygon_work_ > kPolygonWorkBudget)
+                fail("face of " + std::to_string(count) +
+                     " vertices: kdray triangulates polygons whose squared vertex counts add up "
+                     "to at most 2^28 (one face of 16384 vertices; about 2 s), and this file's "
+                     "reach it here; split the large faces (into triangles or smaller polygons)");
+        }
     }
 
     /// One face vertex: "v", "v/vt", "v//vn" or "v/vt/vn".
@@ -297,6 +313,7 @@ class ObjScanner {
     std::size_t line_ = 0;
     ObjPrescan result_;
     std::vector<ForwardReference> forward_;
+    double polygon_work_ = 0;  // the squares of the vertex counts of the faces over 4
 };
 
 }  // namespace

@@ -5,6 +5,8 @@
 
 #include <unistd.h>
 #include <atomic>
+#include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -90,6 +92,36 @@ TEST_CASE("quads and polygons are triangulated as tinyobjloader does") {
     CHECK(scene.scene_vertex(3, 0) == DVec3{1, 0, 1});
     CHECK(scene.scene_vertex(3, 1) == DVec3{3, 1, 1});
     for (std::size_t t = 4; t < 7; ++t) CHECK(scene.scene_vertex(t, 0).z == 2.0);
+}
+
+TEST_CASE("large polygons load within a budget of triangulation work, past it fail at once") {
+    // tinyobjloader's ear clipping takes time growing with n^2 in a face's n vertices: a face
+    // of 100,000 took 20 s. Faces whose squares add up to 2^28 (one of 16384) load.
+    auto polygon = [](int n, int faces) {
+        std::string text;
+        for (int k = 0; k < n; ++k) {
+            const double a = 2 * 3.14159265358979 * k / n;
+            text += "v " + std::to_string(std::cos(a)) + " " + std::to_string(std::sin(a)) + " 0\n";
+        }
+        for (int f = 0; f < faces; ++f) {
+            text += "f";
+            for (int k = 1; k <= n; ++k) text += " " + std::to_string(k);
+            text += "\n";
+        }
+        return text;
+    };
+    TempDir dir;
+    const Scene scene = load_obj(dir.write("disc.obj", polygon(2000, 2)));
+    CHECK(scene.triangle_count() == 2 * 1998);
+    // 5 faces of 8000: 5 * 8000^2 > 2^28 at the fifth face (line 8000 + 5).
+    const auto start = std::chrono::steady_clock::now();
+    const std::string error = load_error(polygon(8000, 5), "discs.obj");
+    CHECK(error.find("discs.obj:8005: face of 8000 vertices") != std::string::npos);
+    CHECK(error.find("2^28") != std::string::npos);
+    const std::string one = load_error(polygon(100000, 1), "huge.obj");
+    CHECK(one.find("huge.obj:100001: face of 100000 vertices") != std::string::npos);
+    // Refused by the pre-scan, before tinyobjloader's triangulation starts.
+    CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(5));
 }
 
 TEST_CASE("negative indices, tabs, CRLF line ends and comments") {
