@@ -199,20 +199,6 @@ nlohmann::json existing_stats(const std::filesystem::path& file) {
     }
 }
 
-/// Says, once, why the first frame waits: the device compiles kdray's kernels.
-void announce_kernel_compiles() {
-    set_program_build_listener([said = false](const ProgramBuildEvent& event) mutable {
-        if (!event.done && !said) {
-            spdlog::info(
-                "compiling OpenCL kernels for '{}' (a first run on a device compiles "
-                "them; later runs read the driver's cache)",
-                event.device);
-            said = true;
-        }
-        if (event.done) spdlog::debug("built {} in {:.0f} ms", event.file, event.ms);
-    });
-}
-
 }  // namespace
 
 int run_render(const RenderCommand& command) {
@@ -273,7 +259,6 @@ int run_render(const RenderCommand& command) {
     create_output_dir(out_dir);
     const bool progress = !command.quiet && stderr_is_terminal();
     ProgressLine progress_line;
-    announce_kernel_compiles();
     // A closed terminal or a killed ssh session (SIGHUP) stops the run as Ctrl-C does.
     for (const int signal : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal, on_interrupt);
 

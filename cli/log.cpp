@@ -9,6 +9,8 @@
 #include <spdlog/details/null_mutex.h>
 #include <spdlog/sinks/base_sink.h>
 
+#include "cl/runtime/program_cache.h"
+
 namespace kdray::cli {
 namespace {
 
@@ -58,6 +60,19 @@ void init_logging(const std::string& level) {
     logger->set_level(level == "debug"   ? spdlog::level::debug
                       : level == "quiet" ? spdlog::level::warn
                                          : spdlog::level::info);
+}
+
+void log_kernel_compiles() {
+    set_program_build_listener([said = false](const ProgramBuildEvent& event) mutable {
+        if (!event.done && !said) {
+            spdlog::info(
+                "compiling OpenCL kernels for '{}' (a first run on a device compiles "
+                "them; later runs read the driver's cache)",
+                event.device);
+            said = true;
+        }
+        if (event.done) spdlog::debug("built {} in {:.0f} ms", event.file, event.ms);
+    });
 }
 
 bool stderr_is_terminal() {

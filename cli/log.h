@@ -14,6 +14,10 @@ namespace kdray::cli {
 /// the command line.
 void init_logging(const std::string& level);
 
+/// Says, once per process at info, that OpenCL kernels are compiling (why a first frame or build
+/// waits seconds), and at debug each program's build time.
+void log_kernel_compiles();
+
 /// Whether stderr is a terminal: the progress line is drawn only there; elsewhere (a file, a
 /// Slurm job's log) a frame is one plain info line.
 bool stderr_is_terminal();

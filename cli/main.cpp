@@ -271,6 +271,7 @@ int main(int argc, char** argv) {
     }
 
     init_logging(log_level.value_or(*render_app && render.quiet ? "quiet" : "info"));
+    log_kernel_compiles();
 
     for (const BuilderOptions* o : {&build.builder, &render.builder, &stats.builder})
         if (!o->retired_max_depth.empty()) {
