@@ -1,16 +1,12 @@
 // `kdray render FRAME.obj... -o OUTDIR`: per frame, load, build, trace and write the image (and
 // the hit AOV), then OUTDIR/stats.json for the run. Every file appears whole or not at all.
-#include <fcntl.h>
-#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <future>
 #include <iostream>
@@ -110,9 +106,10 @@ nlohmann::json apply_overrides(const RenderCommand& command, RenderSettings& set
     nlohmann::json used = nlohmann::json::object();
     if (command.spp) used["spp"] = settings.spp = *command.spp;
     if (command.exposure) {
-        if (!(std::fabs(*command.exposure) <= 64.0))
-            throw UsageError("--exposure " + std::to_string(*command.exposure) +
-                             ": must be between -64 and 64 stops");
+        if (!(std::fabs(*command.exposure) <= kMaxExposureStops))
+            throw UsageError("--exposure: " + fmt::format("{:g}", *command.exposure) +
+                             " is not between -" + fmt::format("{:g}", kMaxExposureStops) +
+                             " and " + fmt::format("{:g}", kMaxExposureStops) + " stops");
         settings.exposure = float(*command.exposure);
         used["exposure"] = settings.exposure;
     }
@@ -144,59 +141,26 @@ std::string effects_text(const nlohmann::json& effects) {
     return text.empty() ? "direct shading only" : text;
 }
 
-/// The frames of `selected` whose files are all in the output folder already (--skip-existing).
-std::vector<std::size_t> frames_written(const std::vector<std::string>& inputs,
-                                        const std::vector<std::size_t>& selected,
-                                        const OutputName& name, const RenderCommand& command) {
-    std::vector<std::size_t> written;
+/// The frames of `selected` that an earlier run into the folder completed (a record in its
+/// stats.json, no failure since) and whose files are all there: what --skip-existing skips. A
+/// frame whose image a killed run left without a record is rendered again.
+std::vector<std::size_t> frames_done(const std::vector<std::string>& inputs,
+                                     const std::vector<std::size_t>& selected,
+                                     const nlohmann::json& previous, const OutputName& name,
+                                     const RenderCommand& command) {
+    const std::set<std::size_t> completed = completed_frames(previous);
+    std::vector<std::size_t> done;
     const std::filesystem::path dir = command.output_dir;
     for (const std::size_t i : selected) {
+        if (completed.count(i) == 0) continue;
         const std::string stem = name(inputs[i], i);
         std::error_code ec;
         bool present = std::filesystem::is_regular_file(dir / (stem + "." + command.format), ec);
         if (command.aov)
             present = present && std::filesystem::is_regular_file(dir / (stem + ".aov.exr"), ec);
-        if (present) written.push_back(i);
+        if (present) done.push_back(i);
     }
-    return written;
-}
-
-/// An exclusive lock on the output folder (flock on the folder itself: no lock file to leave
-/// behind) while a run reads, merges and writes its stats.json: the shards of a job array may
-/// finish into one folder at the same moment.
-class StatsLock {
-  public:
-    explicit StatsLock(const std::filesystem::path& dir) {
-        fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-        if (fd_ < 0 || ::flock(fd_, LOCK_EX) != 0)
-            throw Error(dir.string() + ": cannot lock the folder to merge its stats.json: " +
-                        std::strerror(errno));
-    }
-    ~StatsLock() {
-        if (fd_ >= 0) ::close(fd_);
-    }
-    StatsLock(const StatsLock&) = delete;
-    StatsLock& operator=(const StatsLock&) = delete;
-
-  private:
-    int fd_ = -1;
-};
-
-/// The folder's stats.json as it is, null when there is none; throws Error naming it when it is
-/// not one kdray can merge into.
-nlohmann::json existing_stats(const std::filesystem::path& file) {
-    std::error_code ec;
-    const auto status = std::filesystem::symlink_status(file, ec);
-    if (!std::filesystem::exists(status)) return nullptr;
-    if (std::filesystem::is_directory(status))
-        throw Error(file.string() + ": exists and is a directory, where the run writes its stats");
-    try {
-        return read_render_stats(file);
-    } catch (const Error& e) {
-        throw Error(std::string(e.what()) +
-                    "; a run merges its frames into the folder's stats.json: move it away, or "
-                    "render into another folder");
-    }
+    return done;
 }
 
 }  // namespace
@@ -230,16 +194,18 @@ int run_render(const RenderCommand& command) {
                     " MiB of host memory, more than half of this machine's " +
                     std::to_string(physical >> 20) + " MiB");
     const std::filesystem::path out_dir = command.output_dir;
-    // A folder's stats.json that cannot be merged into fails the run before it renders.
-    existing_stats(out_dir / "stats.json");
+    // The run's frames merge into the folder's stats.json: one that cannot be merged into, or
+    // holds another animation, fails the run before it renders.
+    const nlohmann::json previous = read_folder_stats(out_dir);
+    check_same_inputs(previous, inputs, out_dir / "stats.json");
     if (command.skip_existing) {
-        const std::vector<std::size_t> written =
-            frames_written(inputs, selected, output_name, command);
-        if (!written.empty()) {
-            spdlog::info("skipping {} of {} frame(s): their files are in {}", written.size(),
+        const std::vector<std::size_t> done =
+            frames_done(inputs, selected, previous, output_name, command);
+        if (!done.empty()) {
+            spdlog::info("skipping {} of {} frame(s): rendered into {} already", done.size(),
                          selected.size(), out_dir.string());
             std::vector<std::size_t> rest;
-            std::set_difference(selected.begin(), selected.end(), written.begin(), written.end(),
+            std::set_difference(selected.begin(), selected.end(), done.begin(), done.end(),
                                 std::back_inserter(rest));
             selected = std::move(rest);
         }
@@ -257,7 +223,8 @@ int run_render(const RenderCommand& command) {
     // The builder's programs are built in the first frame (its compile_ms), not here.
     FramePipeline pipeline(*builder, *tracer, settings, frame_options(command, output_name));
     create_output_dir(out_dir);
-    const bool progress = !command.quiet && stderr_is_terminal();
+    const bool progress =
+        !command.quiet && stderr_is_terminal() && spdlog::should_log(spdlog::level::info);
     ProgressLine progress_line;
     // A closed terminal or a killed ssh session (SIGHUP) stops the run as Ctrl-C does.
     for (const int signal : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal, on_interrupt);
@@ -275,10 +242,18 @@ int run_render(const RenderCommand& command) {
             return LoadedScene(std::move(scene), ms_since(start));
         });
     };
-    std::future<LoadedScene> next_scene = load_async(selected[0]);
     // Without a camera in the render file, every run into a folder frames the scene of the first
-    // input: a resumed run, a --frames range or a shard sees what a whole run sees.
-    if (!settings.camera_given && selected[0] != 0) pipeline.frame_on(load_obj(inputs[0]));
+    // input: a resumed run, a --frames range or a shard sees what a whole run sees. Loaded
+    // before the run's first frame starts loading: one scene in memory at a time.
+    if (!settings.camera_given && selected[0] != 0) {
+        try {
+            pipeline.frame_on(load_obj(inputs[0]));
+        } catch (const Error& e) {
+            spdlog::warn("{}; this run frames its own first frame, {}, instead", e.what(),
+                         selected[0]);
+        }
+    }
+    std::future<LoadedScene> next_scene = load_async(selected[0]);
     const double setup_ms = ms_since(setup_start);
 
     double warm_up_ms = 0;
@@ -379,12 +354,14 @@ int run_render(const RenderCommand& command) {
     if (command.warm_up) run["warm_up_ms"] = warm_up_ms;
     if (!failures.empty()) run["failed_frames"] = failures;
     if (interrupted) run["interrupted_after_frames"] = frames.size();
-    if (!frames.empty()) {
-        // Merged into what earlier runs into the folder wrote, under the folder's lock.
-        const StatsLock lock(out_dir);
-        const nlohmann::json merged =
-            merge_render_stats(existing_stats(out_dir / "stats.json"), std::move(run));
-        write_file_atomically(out_dir / "stats.json", json_text(merged) + "\n");
+    if (!frames.empty() || !failures.empty()) {
+        // Other runs into the folder (shards, earlier runs) keep their records.
+        const FolderMerge merge = merge_into_folder(out_dir, std::move(run));
+        if (!merge.locked)
+            spdlog::warn(
+                "{}: merged stats.json without a lock (runs finishing into the folder "
+                "at the same moment may lose each other's records)",
+                merge.lock_problem);
     }
 
     if (interrupted) {

@@ -39,7 +39,7 @@ nlohmann::json defaults_json(const BuilderOptions& o) {
 }
 
 /// A render folder's stats.json, read and checked.
-nlohmann::json read_folder_stats(const std::filesystem::path& dir) {
+nlohmann::json folder_stats(const std::filesystem::path& dir) {
     const std::filesystem::path file = dir / "stats.json";
     std::error_code ec;
     if (!std::filesystem::exists(file, ec))
@@ -48,7 +48,7 @@ nlohmann::json read_folder_stats(const std::filesystem::path& dir) {
 }
 
 nlohmann::json render_folder_json(const std::filesystem::path& dir) {
-    nlohmann::json stats = read_folder_stats(dir);
+    nlohmann::json stats = folder_stats(dir);
     nlohmann::json j = summarise_runs(frames_by_run(stats["frames"]));
     j["folder"] = dir.string();
     j["builder"] = stats.value("builder", "");
@@ -87,11 +87,14 @@ int run_stats(const StatsCommand& command) {
         // Several render folders are the shards of one animation: one summary over them all,
         // each shard a run of its own (with its own first frame).
         std::vector<nlohmann::json> runs;
+        std::size_t folders = 0;
         for (const std::string& path : command.paths)
-            if (std::filesystem::is_directory(path))
-                for (nlohmann::json& run : frames_by_run(read_folder_stats(path)["frames"]))
+            if (std::filesystem::is_directory(path)) {
+                ++folders;
+                for (nlohmann::json& run : frames_by_run(folder_stats(path)["frames"]))
                     runs.push_back(std::move(run));
-        if (runs.size() > 1) out["combined"] = summarise_runs(runs);
+            }
+        if (folders > 1) out["combined"] = summarise_runs(runs);
     }
     if (command.json) {
         std::cout << json_text(out) << "\n";

@@ -11,7 +11,7 @@ namespace kdray {
 /// A checked --name pattern. Placeholders: {stem} (the input's file name without its extension),
 /// {frame} (the frame number: the input's position in the naturally sorted inputs) and
 /// {frame:0N} (zero-padded to N digits, N from 1 to 9). Throws UsageError naming the pattern for
-/// an unknown or unclosed placeholder, a path separator, or an empty pattern.
+/// an unknown or unclosed placeholder, a path separator, an empty name or one starting with '.'.
 class OutputName {
   public:
     explicit OutputName(std::string pattern = "{stem}");

@@ -32,9 +32,6 @@ using nlohmann::json;
 constexpr long long kMaxImageSize = 65536;
 constexpr long long kMaxSpp = 65536;
 constexpr long long kMaxDepth = 1024;
-/// 2^64 and 2^-64 keep every float radiance finite and above zero where it was; an exposure
-/// beyond them is a typo.
-constexpr float kMaxExposureStops = 64.0f;
 
 bool finite(const Vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);

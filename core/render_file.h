@@ -12,6 +12,11 @@
 
 namespace kdray {
 
+/// The most stops an exposure may have either way (the render file's "exposure", --exposure):
+/// 2^64 and 2^-64 keep every float radiance finite and above zero where it was; an exposure
+/// beyond them is a typo.
+inline constexpr float kMaxExposureStops = 64.0f;
+
 /// The camera kdray traces with: in the scene's frame (scene_frame.h), in float, as conventions.md
 /// defines the model.
 struct Camera {

@@ -1,11 +1,19 @@
 #include "core/render_stats.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
 #include <algorithm>
 #include <map>
 #include <set>
 #include <string>
 #include <vector>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/input_file.h"
 #include "core/stats_json.h"
@@ -59,9 +67,108 @@ nlohmann::json read_render_stats(const std::filesystem::path& file) {
     }
     if (stats.contains("runs") && !stats["runs"].is_array())
         throw Error(file.string() + ": runs is not a list");
-    if (stats.contains("failed_frames") && !stats["failed_frames"].is_array())
-        throw Error(file.string() + ": failed_frames is not a list");
+    if (stats.contains("failed_frames")) {
+        if (!stats["failed_frames"].is_array())
+            throw Error(file.string() + ": failed_frames is not a list");
+        for (std::size_t k = 0; k < stats["failed_frames"].size(); ++k) {
+            const nlohmann::json& failure = stats["failed_frames"][k];
+            if (!failure.is_object() || !failure.contains("frame") ||
+                !failure["frame"].is_number_unsigned())
+                throw Error(file.string() + ": failed_frames[" + std::to_string(k) +
+                            "] is not a failed frame's record (an object with its frame number)");
+        }
+    }
     return stats;
+}
+
+nlohmann::json read_folder_stats(const std::filesystem::path& dir) {
+    const std::filesystem::path file = dir / "stats.json";
+    std::error_code ec;
+    const auto status = std::filesystem::symlink_status(file, ec);
+    if (!std::filesystem::exists(status)) return nullptr;
+    if (std::filesystem::is_directory(status))
+        throw Error(file.string() + ": exists and is a directory, where the run writes its stats");
+    try {
+        return read_render_stats(file);
+    } catch (const Error& e) {
+        throw Error(std::string(e.what()) +
+                    "; a run merges its frames into the folder's stats.json: move it away, or "
+                    "render into another folder");
+    }
+}
+
+void check_same_inputs(const nlohmann::json& previous, const std::vector<std::string>& inputs,
+                       const std::filesystem::path& file) {
+    if (!previous.is_object()) return;
+    auto check = [&](const nlohmann::json& record) {
+        const std::size_t frame = frame_number(record);
+        const std::string input = record.value("input", std::string());
+        const std::string name = std::filesystem::path(input).filename().string();
+        if (frame >= inputs.size() ||
+            name != std::filesystem::path(inputs[frame]).filename().string())
+            throw Error(file.string() + ": frame " + std::to_string(frame) + " was rendered from " +
+                        input + ", but this run's frame " + std::to_string(frame) + " is " +
+                        (frame < inputs.size() ? inputs[frame]
+                                               : std::string("past its ") +
+                                                     std::to_string(inputs.size()) + " inputs") +
+                        "; a folder holds one animation: render into another folder");
+    };
+    for (const nlohmann::json& record : previous.value("frames", nlohmann::json::array()))
+        check(record);
+    for (const nlohmann::json& record : previous.value("failed_frames", nlohmann::json::array()))
+        check(record);
+}
+
+std::set<std::size_t> completed_frames(const nlohmann::json& previous) {
+    std::set<std::size_t> done;
+    if (!previous.is_object()) return done;
+    for (const nlohmann::json& record : previous.value("frames", nlohmann::json::array()))
+        done.insert(frame_number(record));
+    for (const nlohmann::json& record : previous.value("failed_frames", nlohmann::json::array()))
+        done.erase(frame_number(record));
+    return done;
+}
+
+namespace {
+
+/// An exclusive lock (flock) on a lock file in the folder, held while a run reads, merges and
+/// writes the folder's stats.json. The file stays: removing it would let a waiting run lock a
+/// file that a third has already replaced.
+class FolderLock {
+  public:
+    explicit FolderLock(const std::filesystem::path& dir) {
+        const std::filesystem::path path = dir / ".kdray-stats.lock";
+        fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+        if (fd_ < 0) {
+            problem_ = path.string() + ": " + std::strerror(errno);
+            return;
+        }
+        while (::flock(fd_, LOCK_EX) != 0) {
+            if (errno == EINTR) continue;
+            problem_ = path.string() + ": " + std::strerror(errno);
+            break;
+        }
+    }
+    ~FolderLock() {
+        if (fd_ >= 0) ::close(fd_);
+    }
+    FolderLock(const FolderLock&) = delete;
+    FolderLock& operator=(const FolderLock&) = delete;
+
+    const std::string& problem() const { return problem_; }
+
+  private:
+    int fd_ = -1;
+    std::string problem_;
+};
+
+}  // namespace
+
+FolderMerge merge_into_folder(const std::filesystem::path& dir, nlohmann::json run) {
+    const FolderLock lock(dir);
+    const nlohmann::json merged = merge_render_stats(read_folder_stats(dir), std::move(run));
+    write_file_atomically(dir / "stats.json", json_text(merged) + "\n");
+    return {lock.problem().empty(), lock.problem()};
 }
 
 std::vector<nlohmann::json> frames_by_run(const nlohmann::json& frames) {
@@ -88,8 +195,15 @@ nlohmann::json merge_render_stats(const nlohmann::json& previous, nlohmann::json
     std::vector<nlohmann::json> frames;
     nlohmann::json failures = nlohmann::json::array();
     if (previous.is_object()) {
-        runs = previous.contains("runs") ? previous["runs"]
-                                         : nlohmann::json::array({settings_of(previous)});
+        if (previous.contains("runs")) {
+            runs = previous["runs"];
+        } else {
+            nlohmann::json only = settings_of(previous);
+            only["frames_rendered"] = nlohmann::json::array();
+            for (const nlohmann::json& f : previous.value("frames", nlohmann::json::array()))
+                only["frames_rendered"].push_back(frame_number(f));
+            runs.push_back(std::move(only));
+        }
         for (nlohmann::json frame : previous.value("frames", nlohmann::json::array())) {
             if (!frame.contains("run")) frame["run"] = 0;
             frames.push_back(std::move(frame));
@@ -97,18 +211,23 @@ nlohmann::json merge_render_stats(const nlohmann::json& previous, nlohmann::json
         failures = previous.value("failed_frames", nlohmann::json::array());
     }
 
-    // This run's frames (rendered or failed) replace the earlier records of their numbers.
+    // This run's records replace the earlier records of their frames, and its failures the
+    // earlier failures; an earlier record of a frame that failed now stays with its image.
     const std::size_t run_index = runs.size();
     nlohmann::json run_frames = run.value("frames", nlohmann::json::array());
     nlohmann::json run_failures = run.value("failed_frames", nlohmann::json::array());
-    std::set<std::size_t> replaced;
-    for (const nlohmann::json& f : run_frames) replaced.insert(frame_number(f));
-    for (const nlohmann::json& f : run_failures) replaced.insert(frame_number(f));
-    auto is_replaced = [&](const nlohmann::json& f) { return replaced.count(frame_number(f)) > 0; };
-    frames.erase(std::remove_if(frames.begin(), frames.end(), is_replaced), frames.end());
+    std::set<std::size_t> rendered_now, attempted_now;
+    for (const nlohmann::json& f : run_frames) rendered_now.insert(frame_number(f));
+    attempted_now = rendered_now;
+    for (const nlohmann::json& f : run_failures) attempted_now.insert(frame_number(f));
+    frames.erase(std::remove_if(frames.begin(), frames.end(),
+                                [&](const nlohmann::json& f) {
+                                    return rendered_now.count(frame_number(f)) > 0;
+                                }),
+                 frames.end());
     nlohmann::json kept_failures = nlohmann::json::array();
     for (const nlohmann::json& f : failures)
-        if (!is_replaced(f)) kept_failures.push_back(f);
+        if (attempted_now.count(frame_number(f)) == 0) kept_failures.push_back(f);
     std::vector<std::size_t> rendered;
     for (nlohmann::json& frame : run_frames) {
         rendered.push_back(frame_number(frame));

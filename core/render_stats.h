@@ -9,7 +9,10 @@
 // "runs"), "failed_frames" (frames whose newest attempt failed) and "summary".
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
+#include <set>
+#include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -21,15 +24,41 @@ namespace kdray {
 /// file and the problem.
 nlohmann::json read_render_stats(const std::filesystem::path& file);
 
+/// `dir`/stats.json read and checked; null when there is none. Throws Error naming the file when
+/// it is not one kdray can merge into (not a regular file, not kdray's, malformed).
+nlohmann::json read_folder_stats(const std::filesystem::path& dir);
+
+/// Throws Error naming `file` when a record of `previous` is of another input than this run's
+/// frame of its number would be (compared by file name: a run from another folder or another
+/// working directory names the same files): a folder holds one animation.
+void check_same_inputs(const nlohmann::json& previous, const std::vector<std::string>& inputs,
+                       const std::filesystem::path& file);
+
+/// The frame numbers `previous` holds a rendered record of and whose newest attempt did not
+/// fail: with their files in the folder, what --skip-existing skips.
+std::set<std::size_t> completed_frames(const nlohmann::json& previous);
+
+/// How merge_into_folder went: whether the folder's lock was taken (a file system without locks,
+/// NFS without lockd say, is merged without one), and why not.
+struct FolderMerge {
+    bool locked = true;
+    std::string lock_problem;
+};
+
+/// Merges `run` into `dir`/stats.json (merge_render_stats) under an exclusive lock on
+/// `dir`/.kdray-stats.lock, so that shards finishing at once add up; written atomically.
+FolderMerge merge_into_folder(const std::filesystem::path& dir, nlohmann::json run);
+
 /// `frames` (a stats.json's frame records) grouped by the run that rendered them ("run"; none:
 /// run 0), each group in frame order: summarise_runs's input for one folder.
 std::vector<nlohmann::json> frames_by_run(const nlohmann::json& frames);
 
 /// The folder's stats.json after a run: `previous` (the file as it was; null when there was none)
-/// with `run`'s frame records (run["frames"]) in place of its records of the same frame numbers
-/// and its failures (run["failed_frames"], optional) in place of theirs, and the summary
-/// recomputed over every frame, each run's first frame counted as a first (summarise_runs).
-/// `run`'s other keys are its settings.
+/// with `run`'s frame records (run["frames"]) in place of its records of the same frame numbers,
+/// and its failures (run["failed_frames"], optional) in place of the earlier failures of theirs
+/// (a failure leaves an earlier record of its frame, whose image it did not replace), and the
+/// summary recomputed over every frame, each run's first frame counted as a first
+/// (summarise_runs). `run`'s other keys are its settings.
 nlohmann::json merge_render_stats(const nlohmann::json& previous, nlohmann::json run);
 
 }  // namespace kdray

@@ -4,10 +4,17 @@
 // not a terminal. Every case that renders runs on the default OpenCL path and on the reference.
 #include <doctest/doctest.h>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <future>
+#include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -76,10 +83,12 @@ TEST_CASE("--name: placeholders expand, bad patterns are usage errors naming the
         CHECK_THROWS_AS(OutputName{bad}, UsageError);
     try {
         OutputName{"x_{fram}"};
+        FAIL("an unknown placeholder was accepted");
     } catch (const UsageError& e) {
         CHECK(std::string(e.what()).find("x_{fram}") != std::string::npos);
         CHECK(std::string(e.what()).find("{fram}") != std::string::npos);
     }
+    CHECK_THROWS_AS(OutputName{".hidden_{frame}"}, UsageError);
 }
 
 TEST_CASE("merge_render_stats: a run replaces its frames' records and keeps the others") {
@@ -105,19 +114,24 @@ TEST_CASE("merge_render_stats: a run replaces its frames' records and keeps the 
         numbers.push_back(f["frame"]);
         runs.push_back(f["run"]);
     }
-    CHECK(numbers == std::vector<std::size_t>{0, 1, 2, 5});
-    CHECK(runs == std::vector<std::size_t>{0, 0, 1, 1});
+    // Frame 3 failed now: its earlier record stays, with its image.
+    CHECK(numbers == std::vector<std::size_t>{0, 1, 2, 3, 5});
+    CHECK(runs == std::vector<std::size_t>{0, 0, 1, 0, 1});
+    CHECK(merged["runs"][0]["frames_rendered"] == nlohmann::json({0, 1, 2, 3}));
     CHECK(merged["frames"][2]["frame_ms"] == 200.0);
     REQUIRE(merged["failed_frames"].size() == 1);
     CHECK(merged["failed_frames"][0]["frame"] == 3);
-    // The summary by hand: 4 frames of 100, 10, 200, 20 ms; each run's first (0 and 2) left out
-    // of the rate after the first.
+    // completed_frames: rendered, and not failed since.
+    CHECK(completed_frames(merged) == std::set<std::size_t>{0, 1, 2, 5});
+    // The summary by hand: 5 frames of 100, 10, 200, 10, 20 ms; each run's first (0 and 2) left
+    // out of the rate after the first: 10, 10 and 20 ms.
     const nlohmann::json& summary = merged["summary"];
-    CHECK(summary["frames"] == 4);
-    CHECK(summary["mean_frame_ms"].get<double>() == doctest::Approx(82.5));
+    CHECK(summary["frames"] == 5);
+    CHECK(summary["mean_frame_ms"].get<double>() == doctest::Approx(68));
     CHECK(summary["worst_frame_ms"].get<double>() == doctest::Approx(200));
-    CHECK(summary["frames_per_second_after_first"].get<double>() == doctest::Approx(1000.0 / 15));
-    CHECK(summary["mean_build_ms"].get<double>() == doctest::Approx(41.25));
+    CHECK(summary["frames_per_second_after_first"].get<double>() ==
+          doctest::Approx(1000.0 / (40.0 / 3)));
+    CHECK(summary["mean_build_ms"].get<double>() == doctest::Approx(34));
     // Merging into nothing is the run alone.
     const nlohmann::json alone = merge_render_stats(nullptr, run);
     CHECK(alone["frames"].size() == 2);
@@ -225,28 +239,78 @@ TEST_CASE("runs into one folder add up: an interrupted run resumed equals one wh
     }
 }
 
-TEST_CASE("two shards finishing into one folder at once: stats.json holds both, merged") {
-    const fs::path dir = fresh_temp_dir("cli-merge-concurrent");
-    const std::vector<std::string> frames = anim_frames(6);
-    REQUIRE(render(frames, dir / "whole", "reference", {"-q"}).status == 0);
-    // Several rounds: the two merges race for the folder's lock each time.
-    for (int round = 0; round < 3; ++round) {
-        const fs::path out = dir / ("shards" + std::to_string(round));
-        auto shard = [&](const char* which) {
-            return std::async(std::launch::async, [&, which] {
-                return render(frames, out, "reference", {"--shard", which, "-q"});
-            });
-        };
-        auto first = shard("0/2"), second = shard("1/2");
-        REQUIRE(first.get().status == 0);
-        REQUIRE(second.get().status == 0);
-        const nlohmann::json merged = read_json(out / "stats.json");
-        CHECK(merged["runs"].size() == 2);
-        CHECK(merged["summary"]["frame_numbers"] == nlohmann::json({0, 1, 2, 3, 4, 5}));
-        const nlohmann::json whole = read_json(dir / "whole" / "stats.json");
-        for (std::size_t k = 0; k < 6; ++k)
-            CHECK(timeless(merged["frames"][k]) == timeless(whole["frames"][k]));
-    }
+TEST_CASE("a run merges into the folder under its lock: it waits while another holds it") {
+    // Shards of a job array may finish into one folder at once; each merges under an exclusive
+    // flock of OUT/.kdray-stats.lock. Held here, the run renders every frame, then waits.
+    const fs::path dir = fresh_temp_dir("cli-merge-lock");
+    const fs::path out = dir / "out";
+    fs::create_directories(out);
+    // O_CLOEXEC: a kdray started while it is open must not inherit the lock.
+    const int lock =
+        ::open((out / ".kdray-stats.lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    REQUIRE(lock >= 0);
+    REQUIRE(::flock(lock, LOCK_EX) == 0);
+    auto run = std::async(std::launch::async,
+                          [&] { return render(anim_frames(3), out, "reference", {"-q"}); });
+    for (int i = 0; i < 600 && !fs::exists(out / "frame_002.png"); ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    REQUIRE(fs::exists(out / "frame_002.png"));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    CHECK(!fs::exists(out / "stats.json"));
+    ::close(lock);
+    REQUIRE(run.get().status == 0);
+    CHECK(read_json(out / "stats.json")["frames"].size() == 3);
+}
+
+TEST_CASE("--skip-existing skips only frames with a record and all their files") {
+    const fs::path dir = fresh_temp_dir("cli-skip");
+    const fs::path out = dir / "out";
+    const std::vector<std::string> frames = anim_frames(3);
+    REQUIRE(render(frames, out, "reference", {"--aov", "-q"}).status == 0);
+    // Frame 1's AOV is gone; frame 2's image stays but its record is gone, as after a run
+    // killed (SIGKILL) between its image and its stats.json.
+    fs::remove(out / "frame_001.aov.exr");
+    nlohmann::json stats = read_json(out / "stats.json");
+    stats["frames"].erase(2);
+    write_text_file(out / "stats.json", stats.dump());
+    const CommandResult r =
+        render(frames, out, "reference", {"--aov", "--skip-existing", "--log-level", "info", "-q"});
+    REQUIRE(r.status == 0);
+    CHECK(r.err.find("skipping 1 of 3 frame(s)") != std::string::npos);
+    const nlohmann::json merged = read_json(out / "stats.json");
+    CHECK(merged["runs"].back()["frames_rendered"] == nlohmann::json({1, 2}));
+    CHECK(fs::exists(out / "frame_001.aov.exr"));
+    CHECK(merged["frames"].size() == 3);
+}
+
+TEST_CASE("a folder holds one animation: another's frames are refused before they render") {
+    const fs::path dir = fresh_temp_dir("cli-other-inputs");
+    const fs::path out = dir / "out";
+    REQUIRE(render(anim_frames(2), out, "reference", {"-q"}).status == 0);
+    // The same numbers, other files: frame 0 is now a copy named otherwise.
+    fs::copy_file(anim_frames(1)[0], dir / "other_000.obj");
+    const CommandResult r = render({(dir / "other_000.obj").string()}, out, "reference", {"-q"});
+    CHECK(r.status == 1);
+    CHECK(r.err.find("stats.json: frame 0 was rendered from ") != std::string::npos);
+    CHECK(r.err.find("other_000.obj") != std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(!fs::exists(out / "other_000.png"));
+}
+
+TEST_CASE("a bad first input: a later range frames its own first frame, with a warning") {
+    const fs::path dir = fresh_temp_dir("cli-bad-first");
+    std::vector<std::string> frames = anim_frames(3);
+    const fs::path bad = write_text_file(dir / "in" / "frame_000.obj", "v 0 0 nan\n");
+    frames[0] = bad.string();
+    const CommandResult r = render(frames, dir / "out", "reference", {"--frames", "1:2", "-q"});
+    CHECK(r.status == 0);
+    CHECK(r.err.find("kdray: warning: ") != std::string::npos);
+    CHECK(r.err.find("frame_000.obj:1") != std::string::npos);
+    CHECK(r.err.find("frames its own first frame, 1") != std::string::npos);
+    // Framed on frame 1, exactly as a run that starts there would be.
+    const std::vector<std::string> good = {anim_frames(3)[1], anim_frames(3)[2]};
+    REQUIRE(render(good, dir / "alone", "reference", {"-q"}).status == 0);
+    CHECK(read_file(dir / "out" / "frame_001.png") == read_file(dir / "alone" / "frame_001.png"));
 }
 
 TEST_CASE("a folder whose stats.json cannot be merged into fails the run before it renders") {
