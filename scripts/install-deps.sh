@@ -11,7 +11,7 @@ packages=(
     pocl-opencl-icd ocl-icd-opencl-dev opencl-clhpp-headers clinfo
     libopenimageio-dev openimageio-tools
     libtinyobjloader-dev libcli11-dev nlohmann-json3-dev doctest-dev
-    help2man bash-completion
+    help2man bash-completion python3-jsonschema
 )
 for option in "$@"; do
     case "$option" in
