@@ -140,6 +140,7 @@ BEYOND_SCHEMA = [
     ("integer written as a real", '{"image": {"width": 64.0}}'),
     ("integer written with an exponent", '{"max_depth": 1e1}'),
     ("fov_y that rounds to 180 in float", '{"camera": {"fov_y": 179.999999999}}'),
+    ("fov_y that rounds to 0 in float", '{"camera": {"fov_y": 1e-50}}'),
     ("look_at at the position", json.dumps({"camera": dict(CAMERA, look_at=[0, 0, 3])})),
     ("up zero", json.dumps({"camera": dict(CAMERA, up=[0, 0, 0])})),
     ("up parallel to the view", json.dumps({"camera": dict(CAMERA, up=[0, 0, 1])})),
