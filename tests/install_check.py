@@ -41,6 +41,7 @@ CASES = [
     (["kdray", "build", "--fo"], [], ["--format"]),  # render's option, not build's
     (["kdray", "stats", "--j"], ["--json"], []),
     (["kdray", "render", "--camera", "d/"], ["d/render.json"], ["d/scene.obj", "d/notes.txt"]),
+    (["kdray", "render", "--camera=d/"], ["d/render.json"], ["d/scene.obj"]),
     (["kdray", "render", "d/"], ["d/scene.obj"], ["d/render.json", "d/notes.txt"]),
     (["kdray", "build", "d/s"], ["d/scene.obj"], []),
     (["kdray", "stats", "d/"], ["d/scene.obj", "d/tree.kdt", "d/out"], ["d/notes.txt"]),
