@@ -142,9 +142,12 @@ class RenderFileParser {
         if (!root.is_object()) throw Error(file_ + ": the render file must be a JSON object");
 
         RenderSettings settings;
-        check_fields(
-            root, "",
-            {"image", "camera", "lights", "background", "ambient", "exposure", "max_depth"});
+        // `$schema` lets an editor find docs/render-file.schema.json; kdray only checks its type.
+        check_fields(root, "",
+                     {"$schema", "image", "camera", "lights", "background", "ambient", "exposure",
+                      "max_depth"});
+        if (present(root, "$schema") && !root["$schema"].is_string())
+            fail("$schema", "must be a string (the path or URL of the render file's JSON Schema)");
         if (present(root, "image")) read_image(root["image"], settings);
         if (present(root, "camera")) {
             read_camera(root["camera"], settings);

@@ -4,6 +4,7 @@
 #   scripts/install-deps.sh            build + test dependencies
 #   scripts/install-deps.sh --peer     also Embree, for the reference peer in ../shared/peers/embree
 #   scripts/install-deps.sh --fuzz     also clang and its sanitizer runtimes, for scripts/fuzz.sh
+#   scripts/install-deps.sh --slurm    also Slurm and munge (13 MB installed), for the slurm_render test
 set -euo pipefail
 
 packages=(
@@ -11,11 +12,13 @@ packages=(
     pocl-opencl-icd ocl-icd-opencl-dev opencl-clhpp-headers clinfo
     libopenimageio-dev openimageio-tools
     libtinyobjloader-dev libcli11-dev nlohmann-json3-dev doctest-dev libspdlog-dev
+    help2man bash-completion python3-jsonschema
 )
 for option in "$@"; do
     case "$option" in
         --peer) packages+=(libembree-dev) ;;
         --fuzz) packages+=(clang libclang-rt-dev) ;;
+        --slurm) packages+=(slurmctld slurmd slurm-client munge) ;;
         *) echo "install-deps: unknown option $option" >&2; exit 2 ;;
     esac
 done

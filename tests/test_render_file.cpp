@@ -94,6 +94,18 @@ TEST_CASE("null means the default (BART's robots render file has a null backgrou
     CHECK(s.spp == 1);
 }
 
+// Editors find docs/render-file.schema.json through a top-level "$schema"; an unknown field is
+// an error everywhere else, so kdray must take this one (and only check that it is a string).
+TEST_CASE("a $schema string is accepted and ignored") {
+    const RenderSettings s = parse_render_json(
+        R"({"$schema": "../docs/render-file.schema.json", "max_depth": 2})", "r.json");
+    CHECK(s.max_depth == 2);
+    CHECK_THROWS_WITH_AS(parse_render_json(R"({"$schema": 1})", "r.json"),
+                         doctest::Contains("field '$schema' must be a string"), Error);
+    CHECK_THROWS_WITH_AS(parse_render_json(R"({"image": {"$schema": "x"}})", "r.json"),
+                         doctest::Contains("unknown field 'image.$schema'"), Error);
+}
+
 TEST_CASE("keyframed cameras: sorted, interpolated linearly, held outside the keys") {
     // Keys given out of order; between frames 0 and 10 the closed form is a + (b - a) * f / 10.
     const RenderSettings s = parse_render_json(R"({"camera": [

@@ -1,0 +1,306 @@
+#!/usr/bin/env python3
+"""scripts/slurm-render.sh on a real, one-node Slurm cluster made for the test.
+
+As root: starts munged with a fresh key and slurmctld + slurmd with a slurm.conf generated in a
+temporary folder (their own ports, sockets, state and logs: nothing of the machine's is used),
+submits testdata/anim as a job array of 3 tasks (`sbatch --array=0-2 --wait`), and checks that
+the frames of the shards' stats.json files, merged by frame number, are those of one `kdray render`
+of the whole animation on this machine: the same frames, inputs, images (byte for byte), rays,
+hit pixels, effects, scenes and trees (everything but times and device bytes, which depend on the
+run), and that `kdray stats OUT/shard_* --json` sums them up as one run of the same frames.
+
+Exits 77 (CTest's SKIP_RETURN_CODE), saying why, when the cluster cannot be had: not root, Slurm
+or munge not installed (scripts/install-deps.sh --slurm), or a daemon that does not come up.
+
+    slurm_render.py --kdray build/kdray
+"""
+import argparse
+import json
+import os
+import pathlib
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+SKIP = 77
+SHARDS = 3
+SIZE = "64x48"
+# What a frame's record holds that depends on the run, not on the frame: times, and device bytes
+# (buffers left by the previous build are reused, README "Performance").
+RUN_DEPENDENT = {"mrays_per_s", "device_bytes", "device_bytes_per_triangle", "timings_ms"}
+
+
+class Skip(Exception):
+    pass
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def stable(record):
+    """A frame record without what depends on the run."""
+    if isinstance(record, dict):
+        return {k: stable(v) for k, v in record.items()
+                if not k.endswith("_ms") and k not in RUN_DEPENDENT}
+    if isinstance(record, list):
+        return [stable(v) for v in record]
+    return record
+
+
+def tail(path, lines=15):
+    try:
+        return "\n".join(pathlib.Path(path).read_text(errors="replace").splitlines()[-lines:])
+    except OSError:
+        return "(no log)"
+
+
+class Cluster:
+    """munged, slurmctld and slurmd in `work`, stopped (by the ids this started) on exit."""
+
+    def __init__(self, work):
+        self.work = work
+        self.processes = []
+        self.munged_pid = None
+        self.conf = work / "slurm.conf"
+        self.socket = work / "munge" / "munge.socket.2"
+        self.env = dict(os.environ, SLURM_CONF=str(self.conf))
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        for p in reversed(self.processes):
+            if p.poll() is None:
+                p.terminate()
+                try:
+                    p.wait(timeout=20)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+                    p.wait()
+        if self.munged_pid:
+            try:
+                os.kill(self.munged_pid, 15)
+            except ProcessLookupError:
+                pass
+
+    def start_munge(self):
+        munge = self.work / "munge"
+        munge.mkdir(mode=0o700)
+        key = munge / "munge.key"
+        key.write_bytes(os.urandom(1024))
+        key.chmod(0o600)
+        log = munge / "munged.log"
+        pid_file = munge / "munged.pid"
+        result = subprocess.run(
+            ["munged", "--force", "--socket=%s" % self.socket, "--key-file=%s" % key,
+             "--log-file=%s" % log, "--pid-file=%s" % pid_file,
+             "--seed-file=%s" % (munge / "munged.seed")],
+            capture_output=True, text=True, timeout=30)
+        if result.returncode != 0:
+            raise Skip("munged did not start (exit %d): %s %s" %
+                       (result.returncode, result.stderr.strip(), tail(log)))
+        for _ in range(50):
+            if pid_file.exists() and pid_file.read_text().strip():
+                self.munged_pid = int(pid_file.read_text().strip())
+                break
+            time.sleep(0.1)
+        # A credential made and read back proves the daemon serves the socket.
+        check = subprocess.run("munge -n -S %s | unmunge -S %s" % (self.socket, self.socket),
+                               shell=True, capture_output=True, text=True, timeout=30)
+        if check.returncode != 0:
+            raise Skip("munge does not answer on %s: %s %s" %
+                       (self.socket, check.stderr.strip(), tail(log)))
+
+    def write_conf(self):
+        host = socket.gethostname().split(".")[0]
+        # The node as slurmd sees the hardware (`NodeName=... CPUs=... RealMemory=...`).
+        probe = subprocess.run(["slurmd", "-C"], capture_output=True, text=True, timeout=60)
+        node = next((l for l in probe.stdout.splitlines() if l.startswith("NodeName=")), None)
+        if probe.returncode != 0 or node is None:
+            raise Skip("slurmd -C cannot describe this machine: %s" % probe.stderr.strip())
+        host = node.split()[0][len("NodeName="):]
+        for d in ("state", "spool"):
+            (self.work / d).mkdir()
+        self.conf.write_text("\n".join([
+            "# One-node cluster of tests/slurm_render.py",
+            "ClusterName=kdraytest",
+            "SlurmctldHost=%s" % host,
+            "SlurmctldPort=%d" % free_port(),
+            "SlurmdPort=%d" % free_port(),
+            "SlurmUser=root",
+            "SlurmdUser=root",
+            "AuthType=auth/munge",
+            "CredType=cred/munge",
+            "AuthInfo=socket=%s" % self.socket,
+            "StateSaveLocation=%s" % (self.work / "state"),
+            "SlurmdSpoolDir=%s" % (self.work / "spool"),
+            "SlurmctldPidFile=%s" % (self.work / "slurmctld.pid"),
+            "SlurmdPidFile=%s" % (self.work / "slurmd.pid"),
+            "SlurmctldLogFile=%s" % (self.work / "slurmctld.log"),
+            "SlurmdLogFile=%s" % (self.work / "slurmd.log"),
+            "SlurmctldDebug=info",
+            "SlurmdDebug=info",
+            # Nothing that needs cgroups, systemd or a database: a container has none of them.
+            "ProctrackType=proctrack/linuxproc",
+            "TaskPlugin=task/none",
+            "JobAcctGatherType=jobacct_gather/none",
+            "AccountingStorageType=accounting_storage/none",
+            "MpiDefault=none",
+            "SwitchType=switch/none",
+            "SchedulerType=sched/builtin",
+            "SelectType=select/cons_tres",
+            "SelectTypeParameters=CR_CPU",
+            "ReturnToService=2",
+            "%s State=UNKNOWN" % node,
+            "PartitionName=kdray Nodes=ALL Default=YES MaxTime=INFINITE State=UP",
+            ""]))
+
+    def start_slurm(self):
+        for daemon, args in (("slurmctld", ["-D", "-i", "-f", str(self.conf)]),
+                             ("slurmd", ["-D", "-f", str(self.conf)])):
+            log = open(self.work / (daemon + ".out"), "w")
+            self.processes.append(subprocess.Popen([daemon] + args, stdout=log,
+                                                   stderr=subprocess.STDOUT, env=self.env))
+        deadline = time.time() + 90
+        while time.time() < deadline:
+            for p, name in zip(self.processes, ("slurmctld", "slurmd")):
+                if p.poll() is not None:
+                    raise Skip("%s exited with %d:\n%s\n%s" % (
+                        name, p.returncode, tail(self.work / (name + ".out")),
+                        tail(self.work / (name + ".log"))))
+            state = subprocess.run(["sinfo", "--noheader", "-o", "%t"], capture_output=True,
+                                   text=True, env=self.env, timeout=30).stdout.split()
+            if state and all(s in ("idle", "mix", "alloc") for s in state):
+                return
+            time.sleep(1)
+        raise Skip("the node did not become idle in 90 s (sinfo: %s):\n%s\n%s" % (
+            state, tail(self.work / "slurmctld.log"), tail(self.work / "slurmd.log")))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--kdray", required=True)
+    parser.add_argument("--keep", action="store_true", help="keep the temporary folder")
+    args = parser.parse_args()
+    kdray = str(pathlib.Path(args.kdray).resolve())
+
+    if os.geteuid() != 0:
+        print("SKIP: the one-node Slurm cluster needs root (its daemons run as root)")
+        return SKIP
+    missing = [t for t in ("munged", "munge", "unmunge", "slurmctld", "slurmd", "sbatch",
+                           "sinfo") if not shutil.which(t)]
+    if missing:
+        print("SKIP: %s not installed (scripts/install-deps.sh --slurm)" % ", ".join(missing))
+        return SKIP
+
+    work = pathlib.Path(tempfile.mkdtemp(prefix="kdray-slurm-"))
+    work.chmod(0o755)  # slurmd's job steps read the scripts' output folders as root anyway
+    failures = []
+    try:
+        with Cluster(work) as cluster:
+            try:
+                cluster.start_munge()
+                cluster.write_conf()
+                cluster.start_slurm()
+            except Skip as e:
+                print("SKIP: %s" % e)
+                return SKIP
+            print("cluster up: %s" % cluster.conf)
+
+            frames = str(ROOT / "testdata" / "anim" / "*.obj")
+            render_json = str(ROOT / "testdata" / "anim" / "render.json")
+            out = work / "out"
+            env = dict(cluster.env, KDRAY=kdray)
+            job = subprocess.run(
+                ["sbatch", "--wait", "--array=0-%d" % (SHARDS - 1), "--cpus-per-task=1",
+                 "--output=%s" % (work / "task-%A_%a.log"), "--chdir=%s" % ROOT,
+                 str(ROOT / "scripts" / "slurm-render.sh"), frames, render_json, str(out),
+                 "--size", SIZE],
+                capture_output=True, text=True, env=env, timeout=1200)
+            print(job.stdout.strip(), job.stderr.strip())
+            for log in sorted(work.glob("task-*.log")):
+                text = log.read_text(errors="replace").strip()
+                if text:
+                    print("%s:\n%s" % (log.name, text))
+            if job.returncode != 0:
+                failures.append("sbatch --wait exited %d" % job.returncode)
+
+        single = work / "single"
+        run = subprocess.run([kdray, "render", frames, "--camera", render_json, "-o",
+                              str(single), "--size", SIZE, "--quiet"],
+                             capture_output=True, text=True, cwd=ROOT, timeout=1200)
+        if run.returncode != 0:
+            failures.append("the single-machine run exited %d: %s" % (run.returncode,
+                                                                        run.stderr.strip()))
+        if failures:
+            raise RuntimeError()
+
+        # Every shard wrote its own stats.json; its frames merged by frame number are the run's.
+        reference = json.loads((single / "stats.json").read_text())["frames"]
+        merged = {}
+        for i in range(SHARDS):
+            shard = out / ("shard_%d" % i)
+            shard_frames = json.loads((shard / "stats.json").read_text())["frames"]
+            print("shard_%d: frames %s" % (i, [f["frame"] for f in shard_frames]))
+            for f in shard_frames:
+                if f["frame"] in merged:
+                    failures.append("frame %d rendered by two shards" % f["frame"])
+                merged[f["frame"]] = (shard, f)
+        want = [f["frame"] for f in reference]
+        if sorted(merged) != want:
+            failures.append("the shards rendered frames %s; one run renders %s" %
+                            (sorted(merged), want))
+        for f in reference:
+            if f["frame"] not in merged:
+                continue
+            shard, g = merged[f["frame"]]
+            if stable(f) != stable(g):
+                a, b = stable(f), stable(g)
+                keys = sorted(k for k in set(a) | set(b) if a.get(k) != b.get(k))
+                failures.append("frame %d differs from the single run in %s" % (f["frame"], keys))
+            if (single / f["image"]).read_bytes() != (shard / g["image"]).read_bytes():
+                failures.append("frame %d: %s differs from the single run's" %
+                                (f["frame"], shard / g["image"]))
+
+        # kdray stats reads the shards as one run.
+        stats = subprocess.run([kdray, "stats"] + [str(out / ("shard_%d" % i))
+                                                   for i in range(SHARDS)] + ["--json"],
+                               capture_output=True, text=True, timeout=300)
+        if stats.returncode != 0:
+            failures.append("kdray stats of the shards exited %d: %s" %
+                            (stats.returncode, stats.stderr.strip()))
+        else:
+            combined = json.loads(stats.stdout).get("combined", {})
+            numbers = combined.get("frame_numbers")
+            if numbers is None or sorted(numbers) != want or combined.get("frames") != len(want):
+                failures.append("kdray stats' combined summary: frames %s, frame_numbers %s; "
+                                "want %d frames %s" % (combined.get("frames"), numbers,
+                                                       len(want), want))
+            else:
+                print("kdray stats combined: %d frames %s" % (combined["frames"], numbers))
+    except RuntimeError:
+        pass
+    finally:
+        if args.keep:
+            print("kept %s" % work)
+        else:
+            shutil.rmtree(work, ignore_errors=True)
+
+    if failures:
+        print("\n%d failures:" % len(failures))
+        for f in failures:
+            print("  " + f)
+        return 1
+    print("\nthe job array's %d shards rendered the frames of one run" % SHARDS)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
