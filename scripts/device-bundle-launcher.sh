@@ -10,7 +10,7 @@
 #   2. OCL_ICD_VENDORS, when the caller set it;
 #   3. /etc/OpenCL/vendors, when it holds .icd files;
 #   4. NVIDIA's libnvidia-opencl.so.1 wherever a driver mount puts it (LD_LIBRARY_PATH's folders,
-#      the usual library folders, ldconfig's cache): a temporary vendors folder names it.
+#      the usual library folders, ldconfig's cache): a vendors folder in TMPDIR names it.
 # With none, it says where it looked and exits 1. `--version` and `--help` need no driver.
 # KDRAY_BUNDLE_SYSTEM_VENDORS stands for /etc/OpenCL/vendors (tests/device_bundle_smoke.sh).
 set -u
@@ -27,7 +27,6 @@ needs_driver=1
 case "${1:-}" in --version | --help | -h | "") needs_driver=0 ;; esac
 
 driver_dirs="${LD_LIBRARY_PATH:-}"
-vendors=""
 add_driver_dir() { driver_dirs="${driver_dirs:+$driver_dirs:}$1"; }
 # The folders where a driver's libraries may be mounted, LD_LIBRARY_PATH's first.
 search_nvidia() {
@@ -54,9 +53,13 @@ search_nvidia() {
     return 1
 }
 
-make_vendors() {  # $1: the driver library an .icd names
-    vendors=$(mktemp -d "${TMPDIR:-/tmp}/kdray-bundle-icd.XXXXXX") || exit 1
-    echo "$1" >"$vendors/kdray-bundle.icd"
+# A vendors folder whose one .icd names $1. Its place is fixed per user and the file replaced
+# whole, so that the launcher can exec kdray (a signal, a timeout's, reaches kdray itself) and
+# leaves no folder per run behind.
+make_vendors() {
+    vendors="${TMPDIR:-/tmp}/kdray-bundle-vendors.$(id -u 2>/dev/null || echo 0)"
+    mkdir -p "$vendors" || exit 1
+    echo "$1" >"$vendors/.kdray-bundle.icd.$$" && mv -f "$vendors/.kdray-bundle.icd.$$" "$vendors/kdray-bundle.icd" || exit 1
     OCL_ICD_VENDORS="$vendors"
     OPENCL_VENDOR_PATH="$vendors"
     export OCL_ICD_VENDORS OPENCL_VENDOR_PATH
@@ -97,7 +100,4 @@ else
 fi
 
 # The bundle's libraries first, then the driver's folder (its own dependencies, libcuda.so.1).
-"$loader" --library-path "$libs${driver_dirs:+:$driver_dirs}" "$here/bin/kdray" "$@"
-status=$?
-[ -n "$vendors" ] && rm -rf "$vendors"
-exit $status
+exec "$loader" --library-path "$libs${driver_dirs:+:$driver_dirs}" "$here/bin/kdray" "$@"

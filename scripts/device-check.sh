@@ -18,7 +18,8 @@
 # Usage: BUNDLE/device-check.sh [--quick] [--budget SECONDS]
 #   --quick   bench at 256x192 with one timed build (a CPU device's smoke test, the CTest)
 # Writes under $OUT when set, else ./device-check-out: summary.json (every step: name, exit
-# status, seconds, output file), info/, correctness/, bench/, logs/. Exit status 1 when a step
+# status, milliseconds, output file), info/, correctness/ (with the device's image and AOV of a
+# case that disagreed), bench/, logs/. Exit status 1 when a step
 # failed or timed out.
 set -uo pipefail
 
@@ -105,13 +106,16 @@ while read -r name obj camera size spp compare; do
         [ "$spp" = "-" ] || args+=(--spp "$spp")
         step "render-$id" 120 - "$kdray" "${args[@]}" || continue
         cp "$work/$id/stats.json" "$out/correctness/$id.stats.json"
+        agree=1
         step "compare-aov-$id" 60 "$out/correctness/$id.aov.json" \
-            "$kdray" compare "$work/$id/$stem.aov.exr" "$here/refs/$name.aov.exr" --json
+            "$kdray" compare "$work/$id/$stem.aov.exr" "$here/refs/$name.aov.exr" --json || agree=0
         case "$compare" in *image*)
             step "compare-image-$id" 60 "$out/correctness/$id.image.json" \
                 "$kdray" compare "$work/$id/$stem.exr" "$here/refs/$name.exr" --json \
-                --tolerance 0.02 --max-fraction 0.005 ;;
+                --tolerance 0.02 --max-fraction 0.005 || agree=0 ;;
         esac
+        # What disagreed comes back to be looked at.
+        [ "$agree" = 1 ] || mv "$work/$id" "$out/correctness/$id.disagreed"
     done
 done <"$here/cases.txt"
 
