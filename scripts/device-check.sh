@@ -148,8 +148,37 @@ for scene in "${bench_scenes[@]}"; do
 done
 rm -rf "$work"
 
-# The summary: the steps, then the device list as kdray printed it.
+# The summary: the steps, the headline figures of each JSON file (read from kdray's own pretty
+# printed JSON: one key a line), then the device list as kdray printed it.
 total_ms=$(( $(now_ms) - start_ms ))
+field() {  # field FILE KEY: the first value of KEY in FILE, or null
+    local v
+    v=$(sed -n "s/^ *\"$2\": \(.*[^,]\),\{0,1\}$/\1/p" "$1" | head -n 1)
+    echo "${v:-null}"
+}
+figures() {  # figures FILE KEY...: {"file": ..., KEY: value, ...}
+    local file=$1 line key
+    shift
+    line="{\"file\": \"${file#"$out"/}\""
+    for key in "$@"; do line="$line, \"$key\": $(field "$file" "$key")"; done
+    echo "$line}"
+}
+{
+    for f in "$out"/correctness/*.json; do
+        case "$f" in
+        *.aov.json) figures "$f" agree mismatch_fraction mismatches pixels ;;
+        *.image.json) figures "$f" agree fraction_over max_abs_difference psnr_db ;;
+        esac
+    done
+} 2>/dev/null >"$out/logs/correctness.jsonl"
+{
+    for f in "$out"/bench/build-*.json; do
+        [ -e "$f" ] && figures "$f" quality build_ms nodes sah_cost
+    done
+    for f in "$out"/bench/render-*.json; do
+        [ -e "$f" ] && figures "$f" mean_frame_ms mean_build_ms mean_trace_ms mean_compile_ms
+    done
+} 2>/dev/null >"$out/logs/bench.jsonl"
 {
     echo "{"
     echo "  \"version\": \"$(tr -d '"\n' <"$out/info/version.txt" 2>/dev/null)\","
@@ -158,6 +187,12 @@ total_ms=$(( $(now_ms) - start_ms ))
     echo "  \"failures\": $failures,"
     echo "  \"steps\": ["
     sed '$!s/$/,/; s/^/    /' "$steps"
+    echo "  ],"
+    echo "  \"correctness\": ["
+    sed '$!s/$/,/; s/^/    /' "$out/logs/correctness.jsonl"
+    echo "  ],"
+    echo "  \"bench\": ["
+    sed '$!s/$/,/; s/^/    /' "$out/logs/bench.jsonl"
     echo "  ],"
     echo "  \"devices\": $( [ -s "$out/info/devices.json" ] && cat "$out/info/devices.json" || echo null)"
     echo "}"
