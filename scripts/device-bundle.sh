@@ -64,6 +64,12 @@ ldd "$out/bin/kdray" | while read -r name arrow path _; do
     [ -e "$path" ] || { echo "device-bundle: ldd names $name at $path, which is missing" >&2; exit 1; }
     cp -L "$path" "$out/lib/$name"
 done
+# glibc's libdl, libpthread and librt (stubs since 2.34): kdray does not link them, but a driver
+# may (NVIDIA's libraries do), and one from the machine's older glibc would meet this libc.
+libc_dir=$(dirname "$(ldd "$out/bin/kdray" | sed -n 's|.*libc\.so\.6 => \([^ ]*\).*|\1|p')")
+for stub in libdl.so.2 libpthread.so.0 librt.so.1; do
+    if [ -e "$libc_dir/$stub" ]; then cp -L "$libc_dir/$stub" "$out/lib/$stub"; fi
+done
 [ -e "$out/lib/ld-linux-x86-64.so.2" ] || { echo "device-bundle: no ld-linux-x86-64.so.2 in ldd's list" >&2; exit 1; }
 [ -e "$out/lib/libOpenCL.so.1" ] || { echo "device-bundle: kdray does not link libOpenCL.so.1" >&2; exit 1; }
 chmod 755 "$out/lib/ld-linux-x86-64.so.2"
