@@ -11,9 +11,9 @@
 #      quality (low, medium, high);
 #   4. bench-render: `kdray render --warm-up` of the same at each quality, at the render file's
 #      size (stats.json).
-# Every step has its own time limit and the whole a budget, so one hang cannot eat the device
-# time: a step past its limit is killed and recorded as timed out; steps after the budget are
-# recorded as skipped. Sized for under 5 minutes on a GPU.
+# Every step has its own time limit and the whole a budget (--budget, 280 s), so one hang cannot
+# eat the device time: a step past its limit, or past what is left of the budget, is killed and
+# recorded as timed out; steps after the budget are recorded as skipped. Sized for under 5 minutes on a GPU.
 #
 # Usage: BUNDLE/device-check.sh [--quick] [--budget SECONDS]
 #   --quick   bench at 256x192 with one timed build (a CPU device's smoke test, the CTest)
@@ -61,6 +61,8 @@ step() {
         failures=$((failures + 1))
         return 1
     fi
+    # No step runs past the budget: its limit is at most what is left of it.
+    [ "$limit" -le $((budget - elapsed)) ] || limit=$((budget - elapsed))
     local t0 rc status
     t0=$(now_ms)
     if [ "$have_timeout" = 1 ]; then
