@@ -28,7 +28,7 @@ while [ $# -gt 0 ]; do
     case "$1" in
     --no-scenes) scenes=0 ;;
     --build-dir) build_dir=$2; shift ;;
-    -h | --help) sed -n '2,21p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,20p' "$0"; exit 0 ;;
     -*) echo "device-bundle: unknown option $1" >&2; exit 2 ;;
     *) [ -z "$out" ] || { echo "device-bundle: one OUTDIR only" >&2; exit 2; }; out=$1 ;;
     esac

@@ -19,8 +19,8 @@
 #   --quick   bench at 256x192 with one timed build (a CPU device's smoke test, the CTest)
 # Writes under $OUT when set, else ./device-check-out: summary.json (every step: name, exit
 # status, milliseconds, output file), info/, correctness/ (with the device's image and AOV of a
-# case that disagreed), bench/, logs/. Exit status 1 when a step
-# failed or timed out.
+# case that disagreed), bench/, logs/. Exit status 1 when a step failed, timed out or was
+# skipped.
 set -uo pipefail
 
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -31,7 +31,7 @@ while [ $# -gt 0 ]; do
     case "$1" in
     --quick) quick=1 ;;
     --budget) budget=$2; shift ;;
-    -h | --help) sed -n '2,26p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,23p' "$0"; exit 0 ;;
     *) echo "device-check: unknown option $1" >&2; exit 2 ;;
     esac
     shift
