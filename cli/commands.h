@@ -64,8 +64,17 @@ struct StatsCommand {
     BuilderOptions builder;
 };
 
+/// `kdray compare A B`: two hit AOVs or two images.
+struct CompareCommand {
+    std::string a, b;
+    bool json = false;
+    double tolerance = 1e-3;             // images: a channel differing by more is "over"
+    std::optional<double> max_fraction;  // default: 1e-4 for AOVs (conventions.md), 0 for images
+};
+
 int run_build(const BuildCommand& command);
 int run_render(const RenderCommand& command);
 int run_stats(const StatsCommand& command);
+int run_compare(const CompareCommand& command);
 
 }  // namespace kdray::cli

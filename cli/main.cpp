@@ -18,6 +18,7 @@
 #include "cli/commands.h"
 #include "cli/log.h"
 #include "core/error.h"
+#include "core/image_codec.h"
 #include "core/version.h"
 
 namespace {
@@ -139,7 +140,8 @@ int main(int argc, char** argv) {
     keep_freed_memory_for_reuse();
     CLI::App app{"kdray: kd-trees built on an OpenCL device (Zhou et al. 2008), ray traced"};
     app.require_subcommand(1);
-    app.set_version_flag("--version", std::string("kdray ") + kdray::kVersion);
+    app.set_version_flag("--version", std::string("kdray ") + kdray::kVersion +
+                                          " (image codec: " + kdray::image_codec_name() + ")");
     init_logging("info");
     std::optional<std::string> log_level;
     app.add_option("--log-level", log_level,
@@ -243,6 +245,26 @@ int main(int argc, char** argv) {
     stats_app->add_flag("--json", stats.json, "machine-readable output");
     add_builder_options(*stats_app, stats.builder);
 
+    CompareCommand compare;
+    auto* compare_app = app.add_subcommand(
+        "compare",
+        "Compare two hit AOVs (conventions.md: both miss, or both hit with |Z_a - Z_b| <= "
+        "1e-4 max(1, Z_b); B is the reference) or two images; exit 1 when they disagree");
+    compare_app->add_option("a", compare.a, "AOV (.aov.exr) or image (PNG, EXR)")->required();
+    compare_app->add_option("b", compare.b, "the reference AOV or image")->required();
+    compare_app->add_flag("--json", compare.json, "machine-readable output");
+    compare_app
+        ->add_option("--tolerance", compare.tolerance,
+                     "images: a pixel with a channel differing by more than this is 'over' "
+                     "(PNG values in [0, 1], EXR linear)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    compare_app
+        ->add_option("--max-fraction", compare.max_fraction,
+                     "the largest share of pixels that may disagree (AOVs: mismatch_fraction; "
+                     "images: pixels over the tolerance). Default: 1e-4 for AOVs, 0 for images")
+        ->check(CLI::Range(0.0, 1.0));
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -252,10 +274,10 @@ int main(int argc, char** argv) {
         std::string hint;
         const std::string first = argc > 1 ? argv[1] : "";
         if (!first.empty() && first[0] != '-' && first != "build" && first != "render" &&
-            first != "stats")
+            first != "stats" && first != "compare")
             hint = "'" + first + "' is not a command" +
-                   nearest_name(first, {"build", "render", "stats"});
-        for (const CLI::App* sub : {build_app, render_app, stats_app})
+                   nearest_name(first, {"build", "render", "stats", "compare"});
+        for (const CLI::App* sub : {build_app, render_app, stats_app, compare_app})
             if (sub->parsed())
                 for (int i = 2; i < argc && hint.empty(); ++i) {
                     std::string arg = argv[i];
@@ -295,6 +317,7 @@ int main(int argc, char** argv) {
         if (*build_app) return run_build(build);
         if (*render_app) return run_render(render);
         if (*stats_app) return run_stats(stats);
+        if (*compare_app) return run_compare(compare);
     } catch (const kdray::UsageError& e) {
         std::cerr << "kdray: error: " << e.what() << "\n";
         return 2;

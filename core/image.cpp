@@ -1,10 +1,9 @@
-// image.cpp — images and hit AOVs to and from files through OpenImageIO. Every file is written to a
-// temporary name beside its target and renamed into place, so a reader never sees half a file and
-// a failed write leaves nothing behind.
+// image.cpp — images and hit AOVs to and from files through the image codec (core/image_codec.h).
+// Every file is encoded in memory, then written to a temporary name beside its target and renamed
+// into place with every write checked (core/atomic_file.h), so a reader never sees half a file, a
+// failed write leaves nothing behind, and a full disk is an error (OpenImageIO's PNG writer does
+// not report one).
 #include "core/image.h"
-
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <cctype>
@@ -13,11 +12,11 @@
 #include <cstring>
 #include <functional>
 #include <string>
-#include <system_error>
 #include <vector>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/image_codec.h"
 
 namespace kdray {
 namespace {
@@ -31,31 +30,13 @@ std::string lower_extension(const fs::path& path) {
     return ext;
 }
 
-/// Writes `spec` to `path` through OpenImageIO: the file is encoded in memory (`write` fills the
-/// opened image), then written atomically with every write checked (core/atomic_file.h), since
-/// OpenImageIO's PNG writer does not report a write that a full disk cut short. An Error names
-/// `path` and OIIO's message.
-void write_image_file(const fs::path& path, const OIIO::ImageSpec& spec,
-                      const std::function<bool(OIIO::ImageOutput&)>& write) {
-    auto fail = [&](const std::string& why) {
-        throw Error("cannot write " + path.string() + ": " + why);
-    };
-    std::vector<unsigned char> encoded;
-    {
-        OIIO::Filesystem::IOVecOutput memory(encoded);
-        // The format comes from the file name's extension, as for a file on disk.
-        auto out = OIIO::ImageOutput::create(path.string(), &memory);
-        if (!out) fail(OIIO::geterror());
-        if (!out->open(path.string(), spec)) fail(out->geterror());
-        if (!write(*out)) {
-            std::string why = out->geterror();
-            out->close();
-            fail(why);
-        }
-        if (!out->close()) fail(out->geterror());
+/// What the codec's `encode()` makes of the image for `path`; an Error names `path`.
+std::string encoded(const fs::path& path, const std::function<std::string()>& encode) {
+    try {
+        return encode();
+    } catch (const Error& e) {
+        throw Error("cannot write " + path.string() + ": " + e.what());
     }
-    write_file_atomically(
-        path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()));
 }
 
 /// The sRGB transfer function (IEC 61966-2-1) of a linear value, clamped to [0, 1] first; NaN
@@ -88,23 +69,21 @@ void write_image(const fs::path& path, const Image& image, float exposure_stops)
         std::vector<std::uint8_t> pixels(image.rgb.size());
         for (std::size_t i = 0; i < pixels.size(); ++i)
             pixels[i] = std::uint8_t(std::lround(srgb_encode(scale * image.rgb[i]) * 255.0f));
-        OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::UINT8);
-        spec.attribute("oiio:ColorSpace", "sRGB");
-        write_image_file(path, spec, [&](OIIO::ImageOutput& out) {
-            return out.write_image(OIIO::TypeDesc::UINT8, pixels.data());
-        });
+        write_file_atomically(path, encoded(path, [&] {
+                                  return encode_png_rgb8(image.width, image.height, pixels);
+                              }));
     } else if (ext == ".exr") {
-        OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
-        spec.attribute("oiio:ColorSpace", "linear");
-        std::vector<float> exposed;
-        if (scale != 1.0f) {
-            exposed.resize(image.rgb.size());
-            for (std::size_t i = 0; i < exposed.size(); ++i) exposed[i] = scale * image.rgb[i];
+        ExrImage exr{image.width, image.height, {{"R"}, {"G"}, {"B"}}};
+        const std::size_t pixels = std::size_t(image.width) * std::size_t(image.height);
+        for (int c = 0; c < 3; ++c) {
+            std::vector<std::uint32_t>& words = exr.channels[c].words;
+            words.resize(pixels);
+            for (std::size_t i = 0; i < pixels; ++i) {
+                const float v = scale * image.rgb[3 * i + c];
+                std::memcpy(&words[i], &v, 4);
+            }
         }
-        const float* linear = scale != 1.0f ? exposed.data() : image.rgb.data();
-        write_image_file(path, spec, [&](OIIO::ImageOutput& out) {
-            return out.write_image(OIIO::TypeDesc::FLOAT, linear);
-        });
+        write_file_atomically(path, encoded(path, [&] { return encode_exr(exr); }));
     } else {
         throw Error("cannot write " + path.string() + ": unknown image extension '" +
                     path.extension().string() + "' (use .png or .exr)");
@@ -121,68 +100,51 @@ void write_aov(const fs::path& path, const HitBuffer& hits) {
 
     // Per-channel formats exactly as peers/embree/embree_ref.cpp writes them (Z float32, prim_id
     // uint32), so that `embree_ref --compare` reads our files; the normals follow as float32.
-    const bool with_normals = !hits.normals.empty();
-    const int channels = with_normals ? 5 : 2;
-    OIIO::ImageSpec spec(hits.width, hits.height, channels, OIIO::TypeDesc::FLOAT);
-    spec.channelnames = {"Z", "prim_id"};
-    spec.channelformats = {OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::UINT};
-    if (with_normals) {
-        spec.channelnames.insert(spec.channelnames.end(), {"N.X", "N.Y", "N.Z"});
-        spec.channelformats.insert(spec.channelformats.end(), 3, OIIO::TypeDesc::FLOAT);
+    const std::size_t pixels = hits.hits.size();
+    ExrImage exr{hits.width, hits.height, {{"Z"}, {"prim_id", true}}};
+    for (ExrChannel& c : exr.channels) c.words.resize(pixels);
+    for (std::size_t i = 0; i < pixels; ++i) {
+        std::memcpy(&exr.channels[0].words[i], &hits.hits[i].t, 4);
+        exr.channels[1].words[i] = hits.hits[i].prim;
     }
-
-    // Native layout: every channel is 4 bytes, packed per pixel in the spec's channel order.
-    const std::size_t stride = 4 * std::size_t(channels);
-    std::vector<unsigned char> buffer(hits.hits.size() * stride);
-    for (std::size_t i = 0; i < hits.hits.size(); ++i) {
-        unsigned char* pixel = &buffer[i * stride];
-        std::memcpy(pixel, &hits.hits[i].t, 4);
-        std::memcpy(pixel + 4, &hits.hits[i].prim, 4);
-        if (with_normals) {
+    if (!hits.normals.empty()) {
+        for (const char* name : {"N.X", "N.Y", "N.Z"})
+            exr.channels.push_back({name, false, std::vector<std::uint32_t>(pixels)});
+        for (std::size_t i = 0; i < pixels; ++i) {
             const float n[3] = {hits.normals[i].x, hits.normals[i].y, hits.normals[i].z};
-            std::memcpy(pixel + 8, n, 12);
+            for (int a = 0; a < 3; ++a) std::memcpy(&exr.channels[2 + a].words[i], &n[a], 4);
         }
     }
-    write_image_file(path, spec, [&](OIIO::ImageOutput& out) {
-        return out.write_image(OIIO::TypeDesc::UNKNOWN, buffer.data(), OIIO::stride_t(stride));
-    });
+    write_file_atomically(path, encoded(path, [&] { return encode_exr(exr); }));
 }
 
 HitBuffer read_aov(const fs::path& path) {
-    auto in = OIIO::ImageInput::open(path.string());
-    if (!in) throw Error("cannot read " + path.string() + ": " + OIIO::geterror());
-    const OIIO::ImageSpec& spec = in->spec();
-    const int z = spec.channelindex("Z"), prim = spec.channelindex("prim_id");
-    if (z < 0 || prim < 0)
-        throw Error("cannot read " + path.string() + ": no Z or prim_id channel");
-    const int nx = spec.channelindex("N.X"), ny = spec.channelindex("N.Y"),
-              nz = spec.channelindex("N.Z");
+    const ExrImage exr = read_exr(path);
+    const ExrChannel* z = exr.find("Z");
+    const ExrChannel* prim = exr.find("prim_id");
+    if (!z || !prim) throw Error("cannot read " + path.string() + ": no Z or prim_id channel");
+    if (z->is_uint || !prim->is_uint)
+        throw Error("cannot read " + path.string() +
+                    ": Z must be float32 and prim_id uint32 (conventions.md)");
+    const ExrChannel* n[3] = {exr.find("N.X"), exr.find("N.Y"), exr.find("N.Z")};
 
     HitBuffer result;
-    result.width = spec.width;
-    result.height = spec.height;
-    const std::size_t pixels = std::size_t(spec.width) * std::size_t(spec.height);
-    auto read_channel = [&](int channel, OIIO::TypeDesc type, void* data) {
-        if (!in->read_image(0, 0, channel, channel + 1, type, data))
-            throw Error("cannot read channel " + spec.channelnames[channel] + " of " +
-                        path.string() + ": " + in->geterror());
-    };
-    std::vector<float> t(pixels);
-    std::vector<std::uint32_t> ids(pixels);
-    read_channel(z, OIIO::TypeDesc::FLOAT, t.data());
-    read_channel(prim, OIIO::TypeDesc::UINT, ids.data());
+    result.width = exr.width;
+    result.height = exr.height;
+    const std::size_t pixels = std::size_t(exr.width) * std::size_t(exr.height);
     result.hits.resize(pixels);
-    for (std::size_t i = 0; i < pixels; ++i) result.hits[i] = KdHit{t[i], ids[i], 0.0f, 0.0f};
-
-    if (nx >= 0 && ny >= 0 && nz >= 0) {
-        std::vector<float> n[3];
-        const int channel[3] = {nx, ny, nz};
-        for (int a = 0; a < 3; ++a) {
-            n[a].resize(pixels);
-            read_channel(channel[a], OIIO::TypeDesc::FLOAT, n[a].data());
-        }
+    for (std::size_t i = 0; i < pixels; ++i) {
+        float t;
+        std::memcpy(&t, &z->words[i], 4);
+        result.hits[i] = KdHit{t, prim->words[i], 0.0f, 0.0f};
+    }
+    if (n[0] && n[1] && n[2] && !n[0]->is_uint && !n[1]->is_uint && !n[2]->is_uint) {
         result.normals.resize(pixels);
-        for (std::size_t i = 0; i < pixels; ++i) result.normals[i] = {n[0][i], n[1][i], n[2][i]};
+        for (std::size_t i = 0; i < pixels; ++i) {
+            float v[3];
+            for (int a = 0; a < 3; ++a) std::memcpy(&v[a], &n[a]->words[i], 4);
+            result.normals[i] = {v[0], v[1], v[2]};
+        }
     }
     return result;
 }

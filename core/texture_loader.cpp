@@ -1,12 +1,13 @@
 #include "core/texture_loader.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <system_error>
 #include <vector>
+
+#include "core/error.h"
+#include "core/image_codec.h"
 
 namespace kdray {
 namespace {
@@ -51,26 +52,22 @@ int TextureLoader::load(const std::string& material, const std::string& statemen
     if (path.empty()) return warn("not found in " + folder_.string());
     if (const auto it = loaded_.find(path); it != loaded_.end())
         return it->second >= 0 ? it->second : warn("cannot be read");
-    auto in = OIIO::ImageInput::open(path.string());
-    if (!in) {
+    DecodedImage image;
+    try {
+        image = read_image(path);
+    } catch (const Error& e) {
         loaded_[path] = -1;
-        return warn("cannot be read (" + OIIO::geterror() + ")");
+        return warn("cannot be read (" + std::string(e.what()) + ")");
     }
-    const OIIO::ImageSpec spec = in->spec();
-    const int channels = spec.nchannels;
-    std::vector<float> pixels(std::size_t(spec.width) * spec.height * std::max(channels, 1));
-    if (spec.width <= 0 || spec.height <= 0 || channels <= 0 ||
-        !in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data())) {
-        loaded_[path] = -1;
-        return warn("cannot be read (" + in->geterror() + ")");
-    }
+    const int channels = image.channels;
+    const std::vector<float>& pixels = image.values;
     // Integer images hold sRGB-encoded values; float images linear ones.
-    const bool srgb = !spec.format.is_floating_point();
+    const bool srgb = image.integer;
     KdTexture entry{};
     entry.offset = kd_u32(scene_.texels.size() / 4);
-    entry.width = kd_u32(spec.width);
-    entry.height = kd_u32(spec.height);
-    const std::size_t texels = std::size_t(spec.width) * spec.height;
+    entry.width = kd_u32(image.width);
+    entry.height = kd_u32(image.height);
+    const std::size_t texels = std::size_t(image.width) * image.height;
     scene_.texels.reserve(scene_.texels.size() + 4 * texels);
     for (std::size_t i = 0; i < texels; ++i) {
         const float* p = &pixels[i * channels];

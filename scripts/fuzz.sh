@@ -3,6 +3,8 @@
 # its seed corpus, so the seeds in the repository stay small and hand-written.
 #   scripts/fuzz.sh [SECONDS]   run each target this long (default 600)
 #   scripts/fuzz.sh --smoke     run each target 10 s (CI)
+#   scripts/fuzz.sh 600 --record   and write docs/fuzz-runs.json (scripts/fuzz_record.py), whose
+#                               table scripts/update_docs.py puts in docs/reliability.md
 # Runs at the lowest priority with one worker: other work on the machine keeps its speed.
 # Crash inputs land in build-fuzz/findings/<target>/; the exit status is non-zero if any target
 # found one. Logs: build-fuzz/logs/<target>/fuzz-0.log.
@@ -13,8 +15,14 @@ seconds=600
 case "${1:-}" in
     --smoke) seconds=10 ;;
     "") ;;
-    *[!0-9]*) echo "usage: scripts/fuzz.sh [SECONDS | --smoke]" >&2; exit 2 ;;
+    *[!0-9]*) echo "usage: scripts/fuzz.sh [SECONDS | --smoke] [--record]" >&2; exit 2 ;;
     *) seconds=$1 ;;
+esac
+record=0
+case "${2:-}" in
+    --record) record=1 ;;
+    "") ;;
+    *) echo "usage: scripts/fuzz.sh [SECONDS | --smoke] [--record]" >&2; exit 2 ;;
 esac
 
 scripts/install-deps.sh --fuzz
@@ -34,6 +42,7 @@ for target in obj render_file mtl tree_file; do
     rm -f "$logs"/fuzz-*.log
     cp -n "$seeds"/* "$corpus"/ 2>/dev/null || true
     echo "fuzz_$target: ${seconds} s on $corpus (log: $logs/fuzz-0.log)"
+    rm -f "$findings"/*
     # With -jobs=1 -workers=1 libFuzzer runs the job in a child process whose output goes to
     # fuzz-0.log in the working folder, hence the cd. detect_leaks=0 unless ASAN_OPTIONS says
     # otherwise: LeakSanitizer needs ptrace, which containers often deny.
@@ -46,4 +55,7 @@ for target in obj render_file mtl tree_file; do
     grep -E '^(#[0-9]+.*DONE|stat::number_of_executed_units|stat::peak_rss_mb)' \
         "$logs/fuzz-0.log" || true
 done
+if [[ $record -eq 1 ]]; then
+    python3 scripts/fuzz_record.py "$seconds" --build-dir "$build_dir" --command "scripts/fuzz.sh $*"
+fi
 exit $status

@@ -11,6 +11,7 @@ packages=(
     build-essential cmake pkg-config python3
     pocl-opencl-icd ocl-icd-opencl-dev opencl-clhpp-headers clinfo
     libopenimageio-dev openimageio-tools
+    libstb-dev libtinyexr-dev  # the small image codec: scripts/device-bundle.sh, its tests
     libtinyobjloader-dev libcli11-dev nlohmann-json3-dev doctest-dev libspdlog-dev
     help2man bash-completion python3-jsonschema
 )

@@ -280,6 +280,17 @@ def robustness_leaks():
                   *[f"{names.get(m, m)} leaks" for m in modes]], rows, data)
 
 
+# ---- docs/reliability.md: the fuzz runs ----------------------------------------------------------
+
+def fuzz_runs():
+    data = load("fuzz-runs")
+    rows = [[f"`{r['target']}`", r["seconds"], f"{r['executions']:,}",
+             f"{r['executions_per_second']:,}", r["coverage"] if r["coverage"] is not None else "",
+             r["corpus_files"], r["peak_rss_mb"], len(r["findings"])] for r in data.rows]
+    return table(["target", "seconds", "executions", "per second", "coverage (edges)",
+                  "corpus files", "peak RSS MB", "findings"], rows, data)
+
+
 TABLES = {
     "performance": performance,
     "cold-build": cold_build,
@@ -291,6 +302,7 @@ TABLES = {
     "spp-doubling": spp_doubling,
     "robustness-speed": robustness_speed,
     "robustness-leaks": robustness_leaks,
+    "fuzz-runs": fuzz_runs,
 }
 
 
