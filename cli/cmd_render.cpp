@@ -148,12 +148,12 @@ std::vector<std::size_t> frames_done(const std::vector<std::string>& inputs,
                                      const std::vector<std::size_t>& selected,
                                      const nlohmann::json& previous, const OutputName& name,
                                      const RenderCommand& command) {
-    const std::set<std::size_t> completed = completed_frames(previous);
+    const std::set<std::string> completed = completed_images(previous);
     std::vector<std::size_t> done;
     const std::filesystem::path dir = command.output_dir;
     for (const std::size_t i : selected) {
-        if (completed.count(i) == 0) continue;
         const std::string stem = name(inputs[i], i);
+        if (completed.count(stem + "." + command.format) == 0) continue;
         std::error_code ec;
         bool present = std::filesystem::is_regular_file(dir / (stem + "." + command.format), ec);
         if (command.aov)
@@ -194,10 +194,9 @@ int run_render(const RenderCommand& command) {
                     " MiB of host memory, more than half of this machine's " +
                     std::to_string(physical >> 20) + " MiB");
     const std::filesystem::path out_dir = command.output_dir;
-    // The run's frames merge into the folder's stats.json: one that cannot be merged into, or
-    // holds another animation, fails the run before it renders.
+    // The run's frames merge into the folder's stats.json: one that cannot be merged into fails
+    // the run before it renders.
     const nlohmann::json previous = read_folder_stats(out_dir);
-    check_same_inputs(previous, inputs, out_dir / "stats.json");
     if (command.skip_existing) {
         const std::vector<std::size_t> done =
             frames_done(inputs, selected, previous, output_name, command);
@@ -329,7 +328,10 @@ int run_render(const RenderCommand& command) {
             // Without --keep-going the first bad frame ends the run; the frames before it
             // are complete, and stats.json below records them.
             if (!command.keep_going && frames.empty()) throw;
-            failures.push_back({{"frame", i}, {"input", inputs[i]}, {"error", e.what()}});
+            failures.push_back({{"frame", i},
+                                {"input", inputs[i]},
+                                {"image", output_name(inputs[i], i) + "." + command.format},
+                                {"error", e.what()}});
             spdlog::error("{}", e.what());
             if (!command.keep_going) break;
         }

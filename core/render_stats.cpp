@@ -38,6 +38,19 @@ std::size_t frame_number(const nlohmann::json& record) {
     return record.value("frame", std::size_t(0));
 }
 
+/// What a record is of: its image's file name (a record per image in the folder), or, for a
+/// failure recorded before failures named their image, its frame and input.
+std::string record_key(const nlohmann::json& record) {
+    if (record.contains("image") && record["image"].is_string()) return record["image"];
+    return std::to_string(frame_number(record)) + "|" + record.value("input", std::string());
+}
+
+/// Records in frame order, then by image: the order of an animation, of scenes at frame 0.
+bool record_before(const nlohmann::json& a, const nlohmann::json& b) {
+    const std::size_t fa = frame_number(a), fb = frame_number(b);
+    return fa != fb ? fa < fb : record_key(a) < record_key(b);
+}
+
 }  // namespace
 
 nlohmann::json read_render_stats(const std::filesystem::path& file) {
@@ -97,35 +110,13 @@ nlohmann::json read_folder_stats(const std::filesystem::path& dir) {
     }
 }
 
-void check_same_inputs(const nlohmann::json& previous, const std::vector<std::string>& inputs,
-                       const std::filesystem::path& file) {
-    if (!previous.is_object()) return;
-    auto check = [&](const nlohmann::json& record) {
-        const std::size_t frame = frame_number(record);
-        const std::string input = record.value("input", std::string());
-        const std::string name = std::filesystem::path(input).filename().string();
-        if (frame >= inputs.size() ||
-            name != std::filesystem::path(inputs[frame]).filename().string())
-            throw Error(file.string() + ": frame " + std::to_string(frame) + " was rendered from " +
-                        input + ", but this run's frame " + std::to_string(frame) + " is " +
-                        (frame < inputs.size() ? inputs[frame]
-                                               : std::string("past its ") +
-                                                     std::to_string(inputs.size()) + " inputs") +
-                        "; a folder holds one animation: render into another folder");
-    };
-    for (const nlohmann::json& record : previous.value("frames", nlohmann::json::array()))
-        check(record);
-    for (const nlohmann::json& record : previous.value("failed_frames", nlohmann::json::array()))
-        check(record);
-}
-
-std::set<std::size_t> completed_frames(const nlohmann::json& previous) {
-    std::set<std::size_t> done;
+std::set<std::string> completed_images(const nlohmann::json& previous) {
+    std::set<std::string> done;
     if (!previous.is_object()) return done;
     for (const nlohmann::json& record : previous.value("frames", nlohmann::json::array()))
-        done.insert(frame_number(record));
+        done.insert(record_key(record));
     for (const nlohmann::json& record : previous.value("failed_frames", nlohmann::json::array()))
-        done.erase(frame_number(record));
+        done.erase(record_key(record));
     return done;
 }
 
@@ -181,9 +172,7 @@ std::vector<nlohmann::json> frames_by_run(const nlohmann::json& frames) {
     }
     std::vector<nlohmann::json> groups;
     for (auto& [index, group] : by_run) {
-        std::stable_sort(group.begin(), group.end(), [](const auto& a, const auto& b) {
-            return frame_number(a) < frame_number(b);
-        });
+        std::stable_sort(group.begin(), group.end(), record_before);
         groups.push_back(std::move(group));
     }
     return groups;
@@ -216,18 +205,18 @@ nlohmann::json merge_render_stats(const nlohmann::json& previous, nlohmann::json
     const std::size_t run_index = runs.size();
     nlohmann::json run_frames = run.value("frames", nlohmann::json::array());
     nlohmann::json run_failures = run.value("failed_frames", nlohmann::json::array());
-    std::set<std::size_t> rendered_now, attempted_now;
-    for (const nlohmann::json& f : run_frames) rendered_now.insert(frame_number(f));
+    std::set<std::string> rendered_now, attempted_now;
+    for (const nlohmann::json& f : run_frames) rendered_now.insert(record_key(f));
     attempted_now = rendered_now;
-    for (const nlohmann::json& f : run_failures) attempted_now.insert(frame_number(f));
+    for (const nlohmann::json& f : run_failures) attempted_now.insert(record_key(f));
     frames.erase(std::remove_if(frames.begin(), frames.end(),
                                 [&](const nlohmann::json& f) {
-                                    return rendered_now.count(frame_number(f)) > 0;
+                                    return rendered_now.count(record_key(f)) > 0;
                                 }),
                  frames.end());
     nlohmann::json kept_failures = nlohmann::json::array();
     for (const nlohmann::json& f : failures)
-        if (attempted_now.count(frame_number(f)) == 0) kept_failures.push_back(f);
+        if (attempted_now.count(record_key(f)) == 0) kept_failures.push_back(f);
     std::vector<std::size_t> rendered;
     for (nlohmann::json& frame : run_frames) {
         rendered.push_back(frame_number(frame));
@@ -238,9 +227,7 @@ nlohmann::json merge_render_stats(const nlohmann::json& previous, nlohmann::json
         f["run"] = run_index;
         kept_failures.push_back(std::move(f));
     }
-    std::stable_sort(frames.begin(), frames.end(), [](const auto& a, const auto& b) {
-        return frame_number(a) < frame_number(b);
-    });
+    std::stable_sort(frames.begin(), frames.end(), record_before);
 
     nlohmann::json settings = settings_of(run);
     nlohmann::json run_record = settings;
@@ -251,6 +238,8 @@ nlohmann::json merge_render_stats(const nlohmann::json& previous, nlohmann::json
     merged["runs"] = std::move(runs);
     merged["frames"] = frames;
     merged["summary"] = summarise_runs(frames_by_run(merged["frames"]));
+    // One folder holds one record per image: scenes rendered one by one into it share frame 0.
+    merged["summary"].erase("warning");
     if (!kept_failures.empty()) merged["failed_frames"] = std::move(kept_failures);
     return merged;
 }

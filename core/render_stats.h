@@ -1,12 +1,13 @@
 // render_stats.h — a render folder's stats.json across runs. A folder can be rendered by several
 // runs (an interrupted run resumed with --skip-existing or --frames, the shards of a job array):
-// its stats.json keeps every frame's newest record, each tagged with the run that rendered it,
-// and one summary over them all.
+// its stats.json keeps the newest record of every image in the folder (a frame of an
+// animation, or a scene rendered on its own), each tagged with the run that rendered it, and one
+// summary over them all.
 //
 // The file: the newest run's settings at the top level (builder, tracer, render_file, image, ...
 // as one run always wrote them), "runs" (every run's settings and the frame numbers it rendered,
-// oldest first), "frames" (one record per frame number, in frame order; "run" is an index into
-// "runs"), "failed_frames" (frames whose newest attempt failed) and "summary".
+// oldest first), "frames" (one record per image, in frame order; "run" is an index into "runs"),
+// "failed_frames" (images whose newest attempt failed) and "summary".
 #pragma once
 
 #include <cstddef>
@@ -28,15 +29,9 @@ nlohmann::json read_render_stats(const std::filesystem::path& file);
 /// it is not one kdray can merge into (not a regular file, not kdray's, malformed).
 nlohmann::json read_folder_stats(const std::filesystem::path& dir);
 
-/// Throws Error naming `file` when a record of `previous` is of another input than this run's
-/// frame of its number would be (compared by file name: a run from another folder or another
-/// working directory names the same files): a folder holds one animation.
-void check_same_inputs(const nlohmann::json& previous, const std::vector<std::string>& inputs,
-                       const std::filesystem::path& file);
-
-/// The frame numbers `previous` holds a rendered record of and whose newest attempt did not
+/// The images (file names) that `previous` holds a record of and whose newest attempt did not
 /// fail: with their files in the folder, what --skip-existing skips.
-std::set<std::size_t> completed_frames(const nlohmann::json& previous);
+std::set<std::string> completed_images(const nlohmann::json& previous);
 
 /// How merge_into_folder went: whether the folder's lock was taken (a file system without locks,
 /// NFS without lockd say, is merged without one), and why not.
@@ -54,9 +49,10 @@ FolderMerge merge_into_folder(const std::filesystem::path& dir, nlohmann::json r
 std::vector<nlohmann::json> frames_by_run(const nlohmann::json& frames);
 
 /// The folder's stats.json after a run: `previous` (the file as it was; null when there was none)
-/// with `run`'s frame records (run["frames"]) in place of its records of the same frame numbers,
-/// and its failures (run["failed_frames"], optional) in place of the earlier failures of theirs
-/// (a failure leaves an earlier record of its frame, whose image it did not replace), and the
+/// with `run`'s frame records (run["frames"]) in place of its records of the same images, and
+/// its failures (run["failed_frames"], optional; each naming the image it would have written) in
+/// place of the earlier failures of theirs (a failure leaves an earlier record of its image,
+/// which it did not replace), and the
 /// summary recomputed over every frame, each run's first frame counted as a first
 /// (summarise_runs). `run`'s other keys are its settings.
 nlohmann::json merge_render_stats(const nlohmann::json& previous, nlohmann::json run);

@@ -92,18 +92,22 @@ TEST_CASE("--name: placeholders expand, bad patterns are usage errors naming the
 }
 
 TEST_CASE("merge_render_stats: a run replaces its frames' records and keeps the others") {
-    auto record = [](std::size_t frame, double ms) {
-        return nlohmann::json{{"frame", frame}, {"frame_ms", ms}, {"build_ms", ms / 2}};
+    auto image = [](std::size_t frame) { return "f" + std::to_string(frame) + ".png"; };
+    auto record = [&](std::size_t frame, double ms) {
+        return nlohmann::json{
+            {"frame", frame}, {"image", image(frame)}, {"frame_ms", ms}, {"build_ms", ms / 2}};
     };
     // A stats.json of one run, as kdray wrote it before runs were recorded: frames 0..3.
-    nlohmann::json old = {{"builder", "old"},
-                          {"frames", {record(0, 100), record(1, 10), record(2, 10), record(3, 10)}},
-                          {"failed_frames", {{{"frame", 5}, {"error", "bad"}}}},
-                          {"summary", nlohmann::json::object()}};
+    nlohmann::json old = {
+        {"builder", "old"},
+        {"frames", {record(0, 100), record(1, 10), record(2, 10), record(3, 10)}},
+        {"failed_frames", {{{"frame", 5}, {"image", image(5)}, {"error", "bad"}}}},
+        {"summary", nlohmann::json::object()}};
     // A second run re-renders frames 2 and 5 and fails frame 3.
-    nlohmann::json run = {{"builder", "new"},
-                          {"frames", {record(2, 200), record(5, 20)}},
-                          {"failed_frames", {{{"frame", 3}, {"error", "worse"}}}}};
+    nlohmann::json run = {
+        {"builder", "new"},
+        {"frames", {record(2, 200), record(5, 20)}},
+        {"failed_frames", {{{"frame", 3}, {"image", image(3)}, {"error", "worse"}}}}};
     const nlohmann::json merged = merge_render_stats(old, run);
     CHECK(merged["builder"] == "new");
     REQUIRE(merged["runs"].size() == 2);
@@ -121,8 +125,9 @@ TEST_CASE("merge_render_stats: a run replaces its frames' records and keeps the 
     CHECK(merged["frames"][2]["frame_ms"] == 200.0);
     REQUIRE(merged["failed_frames"].size() == 1);
     CHECK(merged["failed_frames"][0]["frame"] == 3);
-    // completed_frames: rendered, and not failed since.
-    CHECK(completed_frames(merged) == std::set<std::size_t>{0, 1, 2, 5});
+    // completed_images: rendered, and not failed since.
+    CHECK(completed_images(merged) ==
+          std::set<std::string>{image(0), image(1), image(2), image(5)});
     // The summary by hand: 5 frames of 100, 10, 200, 10, 20 ms; each run's first (0 and 2) left
     // out of the rate after the first: 10, 10 and 20 ms.
     const nlohmann::json& summary = merged["summary"];
@@ -283,18 +288,25 @@ TEST_CASE("--skip-existing skips only frames with a record and all their files")
     CHECK(merged["frames"].size() == 3);
 }
 
-TEST_CASE("a folder holds one animation: another's frames are refused before they render") {
-    const fs::path dir = fresh_temp_dir("cli-other-inputs");
+TEST_CASE("scenes rendered one by one into a folder each keep their record") {
+    // A folder's stats.json holds a record per image: two scenes at frame 0, side by side, and a
+    // scene rendered again replaces its own.
+    const fs::path dir = fresh_temp_dir("cli-scenes-one-by-one");
     const fs::path out = dir / "out";
-    REQUIRE(render(anim_frames(2), out, "reference", {"-q"}).status == 0);
-    // The same numbers, other files: frame 0 is now a copy named otherwise.
-    fs::copy_file(anim_frames(1)[0], dir / "other_000.obj");
-    const CommandResult r = render({(dir / "other_000.obj").string()}, out, "reference", {"-q"});
-    CHECK(r.status == 1);
-    CHECK(r.err.find("stats.json: frame 0 was rendered from ") != std::string::npos);
-    CHECK(r.err.find("other_000.obj") != std::string::npos);
-    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
-    CHECK(!fs::exists(out / "other_000.png"));
+    const fs::path a = write_obj(dir / "a.obj", random_triangles(40, 1));
+    const fs::path b = write_obj(dir / "b.obj", random_triangles(50, 2));
+    for (const fs::path& scene : {a, b, a})
+        REQUIRE(render({scene.string()}, out, "reference", {"-q"}).status == 0);
+    const nlohmann::json stats = read_json(out / "stats.json");
+    REQUIRE(stats["frames"].size() == 2);
+    CHECK(stats["runs"].size() == 3);
+    CHECK(stats["frames"][0]["image"] == "a.png");
+    CHECK(stats["frames"][0]["run"] == 2);
+    CHECK(stats["frames"][0]["scene"]["triangles"] == 40);
+    CHECK(stats["frames"][1]["image"] == "b.png");
+    CHECK(stats["frames"][1]["run"] == 1);
+    CHECK(stats["summary"]["frames"] == 2);
+    CHECK(!stats["summary"].contains("warning"));
 }
 
 TEST_CASE("a bad first input: a later range frames its own first frame, with a warning") {
