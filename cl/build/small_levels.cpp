@@ -18,7 +18,15 @@ static_assert(kLaunchGroup == KDRAY_SMALL_LEVEL_GROUP,
  * level's size (one read per level, as the large stage does). The nodes of every level stay in
  * one array, so that the subtrees' preorder can be laid out afterwards: sizes bottom up and
  * positions top down, a launch per level (the output stage's method, build_output.cl), then
- * every node's record written where the per-root kernel writes it. */
+ * every node's record written where the per-root kernel writes it.
+ *
+ * On PoCL's CPU device this shape is the slower one, which is why auto keeps per-root there:
+ * BART Kitchen frame 0, small_nodes 8373 ms per level against 525 ms per root, the same tree
+ * (690461 nodes, SAH 338.03), peak device memory 232 against 79 MB (median of 5 interleaved
+ * `kdray build --repeat 3` processes, the last build's stage time, a 2-core machine shared at a
+ * load of about 7). A group of 64 works for every node, however few its references, and each
+ * node on a re-clipped table clips its ancestor's triangles again: with --reclip-refs 0 the
+ * figures were 5863 against 928 ms (one build each, same load). */
 void build_batch_levels(BuildContext& ctx, const SmallRoots& small, const TriangleBounds& triangles,
                         SmallSubtrees& out, SmallBatch& batch) {
     cl::CommandQueue& q = ctx.queue;
