@@ -19,7 +19,8 @@ struct BuilderOptions {
     std::string quality;             // low, medium, high; empty: the command's default
     // Set by the user apart from the quality (--large-bins, --reclip-refs, --leaf-refs).
     std::optional<int> large_split_bins, small_reclip_refs, small_leaf_refs;
-    std::string retired_max_depth;  // `--max-depth`, refused by its check (main.cpp)
+    std::string small_stage = "auto";  // --small-stage: small_stage_name's names (main.cpp checks)
+    std::string retired_max_depth;     // `--max-depth`, refused by its check (main.cpp)
 
     /// params at `quality` (default_quality when none was given), with the ladder options the
     /// user set kept.

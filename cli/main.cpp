@@ -73,6 +73,13 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
                    "OpenCL builder: a small node of at most this many triangles is a leaf "
                    "without an SAH search (0: search every node). Default: by --quality")
         ->check(CLI::Range(0, KDRAY_SMALL_ROOT_MAX_REFS));
+    app.add_option("--small-stage", o.small_stage,
+                   "OpenCL builder: how the small-node stage runs, for the same tree: per-root "
+                   "(a work-item builds a small root's whole subtree; CPU devices), per-level "
+                   "(Zhou et al.'s shape: one work-group per node, level by level; GPUs), or auto "
+                   "(per-level on a GPU, else per-root)")
+        ->check(CLI::IsMember({"auto", "per-root", "per-level"}))
+        ->capture_default_str();
     app.add_option("--tree-depth", o.params.max_depth, "deepest kd-tree level")
         ->check(CLI::Range(1, KDRAY_MAX_DEPTH))
         ->capture_default_str();

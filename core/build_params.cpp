@@ -1,7 +1,10 @@
-// build_params.cpp — the one check of kd-tree build parameters (kd_tree.h).
+// build_params.cpp — the one check of kd-tree build parameters, and the small stage's names
+// (kd_tree.h).
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <string_view>
 
 #include "core/error.h"
 #include "core/kd_tree.h"
@@ -17,6 +20,24 @@ template <class T>
 }
 
 }  // namespace
+
+const char* small_stage_name(SmallStage stage) {
+    switch (stage) {
+        case SmallStage::Auto:
+            return "auto";
+        case SmallStage::PerRoot:
+            return "per-root";
+        case SmallStage::PerLevel:
+            return "per-level";
+    }
+    return "?";
+}
+
+std::optional<SmallStage> parse_small_stage(std::string_view name) {
+    for (SmallStage stage : {SmallStage::Auto, SmallStage::PerRoot, SmallStage::PerLevel})
+        if (name == small_stage_name(stage)) return stage;
+    return std::nullopt;
+}
 
 void validate_build_params(const BuildParams& p) {
     const float ct = p.costs.traversal, ci = p.costs.intersection;
@@ -42,6 +63,10 @@ void validate_build_params(const BuildParams& p) {
                "an integer from 0 to 64");
     if (p.max_depth < 0 || p.max_depth > KDRAY_MAX_DEPTH)
         reject("the tree depth limit", "--tree-depth", p.max_depth, "an integer from 0 to 64");
+    if (p.small_stage != SmallStage::Auto && p.small_stage != SmallStage::PerRoot &&
+        p.small_stage != SmallStage::PerLevel)
+        reject("the small-node stage", "--small-stage", int(p.small_stage),
+               "auto, per-root or per-level");
 }
 
 }  // namespace kdray

@@ -59,6 +59,11 @@
 #define KDRAY_MASK_WORDS_PER_REF 16u
 #define KDRAY_MASK_BYTES_PER_REF (KDRAY_MASK_WORDS_PER_REF * 8u)
 
+/* Work-items of one work-group of the per-level small stage (build_small_level.cl): one per
+ * reference a small node may hold (KDRAY_SMALL_ROOT_MAX_REFS), and the work-group size of every
+ * launch (cl/runtime/launch.h's kLaunchGroup, which the host static_asserts equal). */
+#define KDRAY_SMALL_LEVEL_GROUP 64u
+
 /* KdBuildBox — 24 bytes. lo[3], hi[3]: the box's corners. */
 typedef struct KdBuildBox {
     kd_f32 lo[3];
@@ -143,6 +148,41 @@ typedef struct KdSmallRoot {
     kd_u32 depth;
 } KdSmallRoot;
 
+/* KdSmallLevelNode — 96 bytes. A node of the per-level small stage (build_small_level.cl), in
+ * one batch's array of every level's nodes (level by level; a node's children are the next
+ * level's, two consecutive ids). Its parent (or kd_start_small_level) writes the words up to
+ * table_on; its own level writes axis, split, child and, for a leaf, root_mask.
+ *   box[6]          its box, lo.xyz hi.xyz (KdBuildBox).
+ *   mask_lo, hi     bits 0-31 and 32-63 of its triangles, over the re-clipped table of the
+ *                   ancestor that re-clipped (table_on), else over the small root's references.
+ *   root_mask_lo,hi the same triangles over the small root's references (a leaf: its own).
+ *   table_box[6]    table_on: the box of the ancestor that re-clipped (its table is rebuilt from
+ *                   it and table_mask at every level); else 0.
+ *   table_mask_lo,hi table_on: that ancestor's triangles over the root's references, before it
+ *                   re-clipped them; else 0.
+ *   root            its small root's index.
+ *   depth           its depth in the tree.
+ *   table_on        1 when its mask is over a re-clipped table.
+ *   axis            split axis 0/1/2, or KDRAY_LEAF_AXIS.
+ *   split           inner: the split position; leaf: 0.
+ *   child           inner: the id of its below child (the above child is child + 1); leaf: 0. */
+typedef struct KdSmallLevelNode {
+    kd_f32 box[6];
+    kd_u32 mask_lo;
+    kd_u32 mask_hi;
+    kd_u32 root_mask_lo;
+    kd_u32 root_mask_hi;
+    kd_f32 table_box[6];
+    kd_u32 table_mask_lo;
+    kd_u32 table_mask_hi;
+    kd_u32 root;
+    kd_u32 depth;
+    kd_u32 table_on;
+    kd_u32 axis;
+    kd_f32 split;
+    kd_u32 child;
+} KdSmallLevelNode;
+
 /* KdLargeSplitArgs — 32 bytes. kd_split_large_nodes' scalars: the level's node count, the depth
  * limit, force_leaf (1: every node becomes a leaf, the level outgrew the reference budget),
  * empty_ratio C_e, the SAH costs C_t, C_i and the empty-space bonus; pad 0. */
@@ -202,6 +242,7 @@ static_assert(sizeof(KdLargeNode) == 32, "KdLargeNode is 32 bytes on every devic
 static_assert(sizeof(KdLargeSplit) == 8, "KdLargeSplit is 8 bytes on every device");
 static_assert(sizeof(KdLargeCuts) == 56, "KdLargeCuts is 56 bytes on every device");
 static_assert(sizeof(KdSmallRoot) == 40, "KdSmallRoot is 40 bytes on every device");
+static_assert(sizeof(KdSmallLevelNode) == 96, "KdSmallLevelNode is 96 bytes on every device");
 static_assert(sizeof(KdLargeSplitArgs) == 32, "KdLargeSplitArgs is 32 bytes on every device");
 static_assert(sizeof(KdLargeLevelArgs) == 32, "KdLargeLevelArgs is 32 bytes on every device");
 static_assert(sizeof(KdSmallBatchArgs) == 48, "KdSmallBatchArgs is 48 bytes on every device");

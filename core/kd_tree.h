@@ -3,7 +3,9 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -20,11 +22,24 @@ struct SahCosts {
     float intersection = 20.0f;  // C_i: cost of one triangle test
 };
 
-/// Build parameters. The reference builder uses costs, empty_bonus and max_depth; the OpenCL
-/// builder of Zhou et al. (2008) uses them all.
 /// Most SAH bins a large node of the OpenCL builder may use (BuildParams::large_split_bins).
 inline constexpr int kMaxLargeSplitBins = 64;
 
+/// The shape of the OpenCL builder's small-node stage (`--small-stage`); both build the same tree.
+/// PerRoot: one work-item builds a small root's whole subtree, depth first (tuned on CPU devices).
+/// PerLevel: the paper's shape (Zhou et al. 2008, section 4.2), the small nodes of one level at a
+/// time, one work-group per node pricing its candidates in parallel (GPUs). Auto: PerLevel on a
+/// GPU device, PerRoot otherwise.
+enum class SmallStage { Auto, PerRoot, PerLevel };
+
+/// "auto", "per-root" or "per-level".
+const char* small_stage_name(SmallStage stage);
+
+/// The stage named `name` (small_stage_name's names), or nothing.
+std::optional<SmallStage> parse_small_stage(std::string_view name);
+
+/// Build parameters. The reference builder uses costs, empty_bonus and max_depth; the OpenCL
+/// builder of Zhou et al. (2008) uses them all.
 struct BuildParams {
     SahCosts costs;
     /// Reference builder: a split with an empty side has its cost scaled by (1 - empty_bonus).
@@ -47,13 +62,17 @@ struct BuildParams {
     /// 0 searches every node (a leaf then only where no split beats C_i N).
     int small_leaf_refs = 0;
     int max_depth = KDRAY_MAX_DEPTH;
+    /// OpenCL builder: the small stage's shape. It changes how the tree is built, not the tree,
+    /// so tree files do not record it.
+    SmallStage small_stage = SmallStage::Auto;
 };
 
 /// Throws Error naming the parameter (and the command-line option that sets it) when `params`
 /// is outside what the builders support: C_t finite >= 0, C_i finite > 0, empty_bonus in [0, 1),
 /// large_node_threshold in [1, 64] (the small stage's 64-bit masks), empty_space_ratio in [0, 1],
 /// large_split_bins in [0, kMaxLargeSplitBins], small_reclip_refs in [0, KDRAY_RECLIP_REFS],
-/// small_leaf_refs in [0, 64], max_depth in [0, KDRAY_MAX_DEPTH]. NaN fails every
+/// small_leaf_refs in [0, 64], max_depth in [0, KDRAY_MAX_DEPTH], small_stage one of its three
+/// values. NaN fails every
 /// test. The one check of every builder, the command line and tree files read back.
 void validate_build_params(const BuildParams& params);
 
@@ -69,6 +88,9 @@ struct BuildReport {
     /// Large nodes the OpenCL builder made leaves, unsplit, because their level would have held
     /// more references than its budget (pathological input; each is also a warning below).
     std::size_t budget_leaves = 0;
+    /// The small stage's shape the OpenCL builder ran, "per-root" or "per-level" (never "auto";
+    /// empty for other builders).
+    std::string small_stage;
     std::vector<std::string> warnings;  // one line each, for the user and stats.json
 };
 

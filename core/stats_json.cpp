@@ -45,6 +45,9 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
         j["params"]["large_split_bins"] = p.large_split_bins;
         j["params"]["small_reclip_refs"] = p.small_reclip_refs;
         j["params"]["small_leaf_refs"] = p.small_leaf_refs;
+        // What was asked for (auto too), and the shape that ran (per-root or per-level).
+        j["params"]["small_stage"] = small_stage_name(p.small_stage);
+        if (!built.report.small_stage.empty()) j["small_stage"] = built.report.small_stage;
         j["params"]["empty_bonus"] = p.empty_bonus;
         j["large_node_levels"] = built.report.large_node_levels;
         j["small_node_levels"] = built.report.small_node_levels;

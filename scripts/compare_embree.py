@@ -11,7 +11,7 @@ folder with a render.json and an OBJ, or its Embree peer does not build (each sa
 only when ../shared itself is absent, so that CTest reports a skip.
 
   scripts/compare_embree.py --kdray build/kdray [--builder reference] [--tracer reference]
-      [--quality low,medium,high]
+      [--quality low,medium,high] [--small-stage auto|per-root|per-level]
                             [--quick] [--peer PATH]
 """
 import argparse
@@ -70,6 +70,9 @@ def main():
     parser.add_argument("--quality", default="",
                         help="OpenCL builder: comma-separated build qualities to render each scene "
                              "at, each compared with Embree (default: kdray's default)")
+    parser.add_argument("--small-stage", default="",
+                        help="OpenCL builder: the small stage's shape (default: kdray's auto); "
+                             "a scene whose stats.json names another shape fails")
     args = parser.parse_args()
 
     if not os.path.isdir(SHARED):
@@ -105,12 +108,22 @@ def main():
                 start = time.time()
                 run = subprocess.run([args.kdray, "render", obj, "--camera", camera, "--aov", "-q",
                                       "--builder", args.builder, "--tracer", args.tracer, "-o", out]
-                                     + (["--quality", quality] if quality else []),
+                                     + (["--quality", quality] if quality else [])
+                                     + (["--small-stage", args.small_stage]
+                                        if args.small_stage else []),
                                      capture_output=True, text=True)
                 if run.returncode != 0:
                     print(f"FAIL {name}: kdray: {run.stderr.strip()}")
                     failures += 1
                     continue
+                if args.small_stage not in ("", "auto"):
+                    with open(os.path.join(out, "stats.json")) as f:
+                        ran = json.load(f)["frames"][0]["tree"].get("small_stage")
+                    if ran != args.small_stage:
+                        print(f"FAIL {name}: asked for the {args.small_stage} small stage, "
+                              f"stats.json says {ran}")
+                        failures += 1
+                        continue
                 kdray_seconds = time.time() - start
                 ours = os.path.join(out, stem + ".aov.exr")
                 cmp = subprocess.run([peer, "--compare", ours, theirs], check=True,

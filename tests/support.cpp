@@ -11,9 +11,12 @@
 #include <random>
 #include <sstream>
 
+#include <doctest/doctest.h>
+
 #include "core/kd_render.h"
 #include "core/kd_traverse.h"
 #include "core/math.h"
+#include "core/tree_check.h"
 
 namespace kdray::test {
 namespace {
@@ -162,6 +165,34 @@ std::vector<NamedScene> hard_scenes() {
     scenes.push_back({"far_1e5", random_triangles(1000, 4, 10.0f, 0.5f, 1e5f)});
     scenes.push_back({"tiny_1e-4", random_triangles(1000, 5, 1e-4f, 1e-5f)});
     return scenes;
+}
+
+int count_disagreements(const KdTree& tree, const Scene& scene, const std::vector<KdRay>& rays) {
+    const float bounds[6] = {tree.bounds.lo.x, tree.bounds.lo.y, tree.bounds.lo.z,
+                             tree.bounds.hi.x, tree.bounds.hi.y, tree.bounds.hi.z};
+    int bad = 0;
+    for (const KdRay& ray : rays) {
+        const KdHit got = kd_trace_closest(tree.nodes.data(), tree.leaf_indices.data(),
+                                           scene.triangles.data(), bounds, ray);
+        if (!hits_agree(got, brute_force_closest(scene, ray))) ++bad;
+    }
+    return bad;
+}
+
+void check_same_tree(const KdTree& other, const KdTree& tree, const Scene& scene,
+                     std::uint32_t ray_seed) {
+    CHECK(check_tree(other, scene).empty());
+    REQUIRE(other.nodes.size() == tree.nodes.size());
+    std::size_t differ = 0, first_difference = tree.nodes.size();
+    for (std::size_t i = 0; i < tree.nodes.size(); ++i)
+        if (other.nodes[i].split_or_count != tree.nodes[i].split_or_count ||
+            other.nodes[i].axis_and_offset != tree.nodes[i].axis_and_offset) {
+            if (differ++ == 0) first_difference = i;
+        }
+    CAPTURE(first_difference);
+    CHECK(differ == 0);
+    CHECK(other.leaf_indices == tree.leaf_indices);
+    CHECK(count_disagreements(other, scene, random_rays(scene, 1000, ray_seed)) == 0);
 }
 
 KdRay make_ray(Vec3 org, Vec3 dir, float tmin, float tmax) {

@@ -12,6 +12,7 @@
 
 #include "core/image.h"
 #include "core/kd_shared.h"
+#include "core/kd_tree.h"
 #include "core/math.h"
 #include "core/scene.h"
 
@@ -63,6 +64,15 @@ KdHit brute_force_closest(const Scene& scene, const KdRay& ray);
 /// Two hits agree when both miss, or both hit within a relative 1e-4 (conventions.md); the
 /// triangle may differ on a tie.
 bool hits_agree(const KdHit& a, const KdHit& b);
+
+/// Rays traced through `tree` by the shared walk whose hits disagree with brute force's.
+int count_disagreements(const KdTree& tree, const Scene& scene, const std::vector<KdRay>& rays);
+
+/// doctest checks that `other`, a tree built another way (batches, a second pass, the other
+/// small stage), is valid and node for node and leaf index for leaf index `tree`, and traces
+/// 1000 rays (ray_seed) as brute force does.
+void check_same_tree(const KdTree& other, const KdTree& tree, const Scene& scene,
+                     std::uint32_t ray_seed);
 
 /// An AOV's centre hits against brute force along conventions.md's camera ray of every pixel,
 /// the brute force's distances mapped to the scene's units as the AOV writes them.

@@ -186,6 +186,39 @@ TEST_CASE("--quality: the ladder's parameters, each command's default, options s
     fs::remove_all(dir);
 }
 
+TEST_CASE("--small-stage: both shapes build the same tree, say which ran; a bad name is refused") {
+    fs::path dir = fresh_temp_dir("cli-small-stage");
+    const fs::path obj = write_obj(dir / "in" / "frame_1.obj", random_triangles(2000, 17));
+    auto build_json = [&](const std::string& stage) {
+        const CommandResult r =
+            run_kdray({"build", obj.string(), "--json", "--small-stage", stage});
+        REQUIRE_MESSAGE(r.status == 0, r.err);
+        return nlohmann::json::parse(r.out);
+    };
+    const nlohmann::json per_root = build_json("per-root"), per_level = build_json("per-level");
+    CHECK(per_root["small_stage"] == "per-root");
+    CHECK(per_root["params"]["small_stage"] == "per-root");
+    CHECK(per_level["small_stage"] == "per-level");
+    CHECK(per_level["nodes"] == per_root["nodes"]);
+    CHECK(per_level["leaves"] == per_root["leaves"]);
+    CHECK(per_level["sah_cost"] == per_root["sah_cost"]);
+    // auto: the chosen shape is recorded, the request beside it.
+    const nlohmann::json automatic = build_json("auto");
+    CHECK(automatic["params"]["small_stage"] == "auto");
+    CHECK((automatic["small_stage"] == "per-root" || automatic["small_stage"] == "per-level"));
+    // A render's stats.json records it per frame.
+    const fs::path render = write_text_file(dir / "render.json", kSmallRender);
+    CommandResult r =
+        run_kdray({"render", obj.string(), "-o", (dir / "out").string(), "--camera",
+                   render.string(), "--tracer", "reference", "-q", "--small-stage", "per-level"});
+    REQUIRE_MESSAGE(r.status == 0, r.err);
+    CHECK(read_json(dir / "out" / "stats.json")["frames"][0]["tree"]["small_stage"] == "per-level");
+    r = run_kdray({"build", obj.string(), "--small-stage", "bogus"});
+    CHECK(r.status == 2);
+    CHECK(r.err.find("--small-stage") != std::string::npos);
+    fs::remove_all(dir);
+}
+
 TEST_CASE("a mistyped command or option is answered with the nearest valid name") {
     struct Case {
         std::vector<std::string> args;

@@ -29,20 +29,6 @@ using namespace kdray;
 
 namespace {
 
-// Traces `rays` through the tree with the shared walk and compares each hit with brute force.
-int count_disagreements(const KdTree& tree, const Scene& scene, const std::vector<KdRay>& rays) {
-    const float bounds[6] = {tree.bounds.lo.x, tree.bounds.lo.y, tree.bounds.lo.z,
-                             tree.bounds.hi.x, tree.bounds.hi.y, tree.bounds.hi.z};
-    int bad = 0;
-    for (const KdRay& ray : rays) {
-        const KdHit got = kd_trace_closest(tree.nodes.data(), tree.leaf_indices.data(),
-                                           scene.triangles.data(), bounds, ray);
-        const KdHit want = test::brute_force_closest(scene, ray);
-        if (!test::hits_agree(got, want)) ++bad;
-    }
-    return bad;
-}
-
 void check_build(const Scene& scene, const std::string& name, const BuildParams& params = {}) {
     CAPTURE(name);
     BuildReport report;
@@ -60,7 +46,7 @@ void check_build(const Scene& scene, const std::string& name, const BuildParams&
     const KdTree ref = build_reference(scene, {});
     CHECK(tree.nodes.size() <= 16 * n + 16);
     CHECK(tree.leaf_indices.size() <= 3 * ref.leaf_indices.size() + 64);
-    CHECK(count_disagreements(tree, scene, test::random_rays(scene, 2000, 99)) == 0);
+    CHECK(test::count_disagreements(tree, scene, test::random_rays(scene, 2000, 99)) == 0);
 }
 
 Scene two_clusters() {
@@ -157,24 +143,6 @@ BuildParams median_split() {
     return params;
 }
 
-/// A tree built another way (batches, a second pass) against the default build of the same scene:
-/// valid, node for node and leaf index for leaf index the same, and tracing as brute force does.
-void check_same_tree(const KdTree& other, const KdTree& tree, const Scene& scene,
-                     std::uint32_t ray_seed) {
-    CHECK(check_tree(other, scene).empty());
-    REQUIRE(other.nodes.size() == tree.nodes.size());
-    std::size_t differ = 0, first_difference = tree.nodes.size();
-    for (std::size_t i = 0; i < tree.nodes.size(); ++i)
-        if (other.nodes[i].split_or_count != tree.nodes[i].split_or_count ||
-            other.nodes[i].axis_and_offset != tree.nodes[i].axis_and_offset) {
-            if (differ++ == 0) first_difference = i;
-        }
-    CAPTURE(first_difference);
-    CHECK(differ == 0);
-    CHECK(other.leaf_indices == tree.leaf_indices);
-    CHECK(count_disagreements(other, scene, test::random_rays(scene, 1000, ray_seed)) == 0);
-}
-
 }  // namespace
 
 TEST_CASE("opencl builder: hard scenes pass the checker and trace like brute force") {
@@ -259,7 +227,7 @@ TEST_CASE("opencl builder: a node at or below the leaf size is a leaf, without a
     CHECK(check_tree(stopped, scene).empty());
     CHECK(fewest_under_inner_node(stopped) > 8);
     CHECK(stopped.nodes.size() < searched.nodes.size());
-    CHECK(count_disagreements(stopped, scene, test::random_rays(scene, 500, 5)) == 0);
+    CHECK(test::count_disagreements(stopped, scene, test::random_rays(scene, 500, 5)) == 0);
 }
 
 TEST_CASE("opencl builder: needles across the whole scene give valid trees that trace right") {
@@ -274,7 +242,7 @@ TEST_CASE("opencl builder: needles across the whole scene give valid trees that 
         const KdTree tree =
             build_opencl(test::opencl_test_device(), scene, with_build_quality({}, q));
         CHECK(check_tree(tree, scene).empty());
-        CHECK(count_disagreements(tree, scene, test::random_rays(scene, 1000, 17)) == 0);
+        CHECK(test::count_disagreements(tree, scene, test::random_rays(scene, 1000, 17)) == 0);
     }
 }
 
@@ -336,7 +304,7 @@ TEST_CASE("opencl builder: large nodes split at the binned SAH plane, or at the 
     REQUIRE(!kd_node_is_leaf(median.nodes[0]));
     CHECK(kd_node_axis(median.nodes[0]) == 0);
     CHECK(kd_node_split(median.nodes[0]) == 2.0f);
-    CHECK(count_disagreements(median, scene, test::random_rays(scene, 1000, 5)) == 0);
+    CHECK(test::count_disagreements(median, scene, test::random_rays(scene, 1000, 5)) == 0);
 }
 
 TEST_CASE("opencl builder: empty space is cut off around two far clusters") {
@@ -447,7 +415,7 @@ TEST_CASE("opencl builder: depth limit and leaf threshold are respected") {
     params.large_node_threshold = 16;
     const KdTree small_t = build_opencl(test::opencl_test_device(), scene, params);
     CHECK(check_tree(small_t, scene).empty());
-    CHECK(count_disagreements(small_t, scene, test::random_rays(scene, 500, 3)) == 0);
+    CHECK(test::count_disagreements(small_t, scene, test::random_rays(scene, 500, 3)) == 0);
 }
 
 TEST_CASE("opencl builder: the small stage in batches of roots gives the same tree") {
@@ -460,9 +428,9 @@ TEST_CASE("opencl builder: the small stage in batches of roots gives the same tr
         const KdTree tree = build_opencl(test::opencl_test_device(), scene);
         for (unsigned scale : {10u, 1u}) {
             CAPTURE(scale);
-            check_same_tree(detail::build_opencl_with_limits(test::opencl_test_device(), scene, {},
-                                                             {scale, 16384}),
-                            tree, scene, 19);
+            test::check_same_tree(detail::build_opencl_with_limits(test::opencl_test_device(),
+                                                                   scene, {}, {scale, 16384}),
+                                  tree, scene, 19);
         }
     }
 }
@@ -484,7 +452,7 @@ TEST_CASE("opencl builder: subtrees that outgrow their first records give the sa
          {make_scene(std::move(tris), "scattered"), test::random_triangles(3000, 31)}) {
         CAPTURE(scene.triangle_count());
         const KdTree tree = build_opencl(test::opencl_test_device(), scene);
-        check_same_tree(
+        test::check_same_tree(
             detail::build_opencl_with_limits(test::opencl_test_device(), scene, {}, {1, 0}), tree,
             scene, 17);
     }
@@ -502,7 +470,7 @@ TEST_CASE("opencl builder: buffers kept from an earlier build give the same tree
     DeviceTree on_device;
     const KdTree first = build_opencl(device, other, {}, nullptr, &on_device);
     const KdTree reused = build_opencl(device, scene);
-    check_same_tree(reused, fresh, scene, 23);
+    test::check_same_tree(reused, fresh, scene, 23);
     std::vector<KdNode> nodes(first.nodes.size());
     device.queue().enqueueReadBuffer(on_device.nodes, CL_TRUE, 0, nodes.size() * sizeof(KdNode),
                                      nodes.data());

@@ -31,6 +31,12 @@ BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins) {
         k.split_masks = make_kernel(small, "kd_compute_split_masks");
         k.build_subtrees = make_kernel(small, "kd_build_small_subtrees");
         k.second_pass_records = make_kernel(small, "kd_second_pass_records");
+        k.start_small_level = make_kernel(small, "kd_start_small_level");
+        k.split_small_level = make_kernel(small, "kd_split_small_level");
+        k.size_small_level = make_kernel(small, "kd_size_small_level");
+        k.place_small_level = make_kernel(small, "kd_place_small_level");
+        k.count_small_level = make_kernel(small, "kd_count_small_level");
+        k.write_small_level = make_kernel(small, "kd_write_small_level");
         k.size_subtrees = make_kernel(output, "kd_size_subtrees");
         k.place_subtrees = make_kernel(output, "kd_place_subtrees");
         k.write_nodes = make_kernel(output, "kd_write_nodes");

@@ -23,6 +23,9 @@ namespace kdray::build_detail {
 struct BuilderKernels {
     cl::Kernel compute_aabbs, bin_large, split_large, classify, count_large, emit_large, distribute;
     cl::Kernel split_masks, build_subtrees, second_pass_records;
+    // The small stage's per-level shape (build_small_level.cl, in the small program).
+    cl::Kernel start_small_level, split_small_level, size_small_level, place_small_level,
+        count_small_level, write_small_level;
     cl::Kernel size_subtrees, place_subtrees, write_nodes, write_small;
 };
 

@@ -88,7 +88,15 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
     tree.bounds = scene.bounds();
     tree.params = supported_params(params);
     tree.builder = "opencl";
-    if (report) *report = BuildReport{};
+    // The small stage's shape: the paper's level-parallel one on GPUs (one work-item's private
+    // tables spill there), the per-root one elsewhere; the tree is the same.
+    const bool per_level = tree.params.small_stage == SmallStage::PerLevel ||
+                           (tree.params.small_stage == SmallStage::Auto && device.is_gpu());
+    if (report) {
+        *report = BuildReport{};
+        report->small_stage =
+            small_stage_name(per_level ? SmallStage::PerLevel : SmallStage::PerRoot);
+    }
     const std::size_t n = scene.triangle_count();
     check_offset_limit(n, "triangles");
     if (n == 0) {
@@ -116,9 +124,9 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
     const LargeStageResult large =
         run_large_stage(ctx, b.triangles, tree.bounds, b.output, b.small_roots);
     clock.lap("large_nodes");
-    b.small =
-        run_small_stage(ctx, b.small_roots, b.triangles, std::max(1u, limits.subtree_budget_scale),
-                        limits.batch_bytes ? limits.batch_bytes : device.info().max_alloc_bytes);
+    b.small = run_small_stage(
+        ctx, b.small_roots, b.triangles, std::max(1u, limits.subtree_budget_scale),
+        limits.batch_bytes ? limits.batch_bytes : device.info().max_alloc_bytes, per_level);
     clock.lap("small_nodes");
     b.tree = write_preorder(ctx, b.output, b.small_roots, b.small);
     clock.lap("output");

@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "cl/build/small_levels.h"
 #include "cl/runtime/launch.h"
 #include "core/error.h"
 
@@ -100,18 +101,7 @@ void build_batch_subtrees(BuildContext& ctx, const SmallRoots& small,
         q.enqueueReadBuffer(totals.buffer(), CL_TRUE, 0, 3 * sizeof(cl_uint), total.data());
     });
     if (total[1] > batch.first_scale) {
-        // Each outgrown subtree's node count, scanned into its place (one entry more: the total).
-        batch.second_offset =
-            ctx.allocate<cl_uint>(std::size_t(batch.roots) + 1, "second-pass record offsets");
-        with_cl_context("clearing the second-pass record offsets", [&] {
-            q.enqueueFillBuffer(batch.second_offset.buffer(), cl_uint(0),
-                                std::size_t(batch.roots) * sizeof(cl_uint), sizeof(cl_uint));
-        });
-        enqueue_kernel(q, ctx.kernels.second_pass_records, batch.roots, batch.args(ctx.params, 0),
-                       small.roots.buffer(), out.node_count.buffer(), batch.second_offset.buffer());
-        ctx.primitives.exclusive_scan(batch.second_offset.buffer(), batch.second_offset.buffer(),
-                                      std::size_t(batch.roots) + 1);
-        const cl_uint second_records = ctx.read_uint(batch.second_offset, batch.roots);
+        const cl_uint second_records = place_second_pass(ctx, small, out, batch);
         batch.records[1] =
             ctx.allocate<KdSmallNode>(second_records, "small node records (second pass)");
         build_subtrees(1, batch.second_offset, batch.records[1]);
@@ -122,16 +112,34 @@ void build_batch_subtrees(BuildContext& ctx, const SmallRoots& small,
 
 }  // namespace
 
+cl_uint place_second_pass(BuildContext& ctx, const SmallRoots& small, const SmallSubtrees& out,
+                          SmallBatch& batch) {
+    cl::CommandQueue& q = ctx.queue;
+    // Each outgrown subtree's node count, scanned into its place (one entry more: the total).
+    batch.second_offset =
+        ctx.allocate<cl_uint>(std::size_t(batch.roots) + 1, "second-pass record offsets");
+    with_cl_context("clearing the second-pass record offsets", [&] {
+        q.enqueueFillBuffer(batch.second_offset.buffer(), cl_uint(0),
+                            std::size_t(batch.roots) * sizeof(cl_uint), sizeof(cl_uint));
+    });
+    enqueue_kernel(q, ctx.kernels.second_pass_records, batch.roots, batch.args(ctx.params, 0),
+                   small.roots.buffer(), out.node_count.buffer(), batch.second_offset.buffer());
+    ctx.primitives.exclusive_scan(batch.second_offset.buffer(), batch.second_offset.buffer(),
+                                  std::size_t(batch.roots) + 1);
+    return ctx.read_uint(batch.second_offset, batch.roots);
+}
+
 /* Small-node stage (§4.2): split-candidate masks once, then every small root's subtree in one
  * launch (build_small.cl) instead of one launch, scan and read-back per level. Kitchen small_nodes
  * 153-199 -> 79 ms, bunny 112 -> 71 ms (median of 5 builds, same sitting, loaded 2-core machine);
  * CPU time (perf stat task-clock, 6 builds) kitchen 2912 -> 2380 ms, bunny 1903 -> 1465 ms.
  * Both launches go by batch of roots when the masks (KDRAY_MASK_BYTES_PER_REF per reference) or
  * the records would outgrow one allocation; the batches' trees are the ones a single batch
- * builds. */
+ * builds. per_level: each batch's subtrees level by level instead (small_levels.cpp, the paper's
+ * shape for GPUs), into the same records. */
 SmallSubtrees run_small_stage(BuildContext& ctx, const SmallRoots& small,
                               const TriangleBounds& triangles, cl_uint first_scale,
-                              std::size_t batch_bytes) {
+                              std::size_t batch_bytes, bool per_level) {
     SmallSubtrees out;
     // The output stage reads the subtree counts even when there are no small roots.
     const std::size_t roots = std::max<cl_uint>(small.count, 1);
@@ -141,6 +149,7 @@ SmallSubtrees run_small_stage(BuildContext& ctx, const SmallRoots& small,
     checked_u32(6 * std::size_t(small.refs), "split candidates");
     out.batches = small_batches(ctx, small, first_scale, batch_bytes);
 
+    // The per-root kernel's totals (read once per batch).
     DeviceArray totals = ctx.allocate<cl_uint>(3, "small stage totals");
     for (SmallBatch& batch : out.batches) {
         // The last batch's masks are held to the end of the build, whose arrays then go to the
@@ -152,7 +161,10 @@ SmallSubtrees run_small_stage(BuildContext& ctx, const SmallRoots& small,
         enqueue_kernel(ctx.queue, ctx.kernels.split_masks, batch.refs, batch.ref_begin, batch.refs,
                        small.ref_box.buffer(), small.ref_root.buffer(), small.roots.buffer(),
                        out.side_masks.buffer());
-        build_batch_subtrees(ctx, small, triangles, out, batch, totals);
+        if (per_level)
+            build_batch_levels(ctx, small, triangles, out, batch);
+        else
+            build_batch_subtrees(ctx, small, triangles, out, batch, totals);
     }
     return out;
 }

@@ -1,6 +1,7 @@
 // small_subtrees.h — the small-node stage of the OpenCL builder (Zhou et al. 2008, §4.2): every
 // small root's subtree by the full SAH over 64-bit triangle masks (internal to cl/build/; the
-// kernels are build_small.cl's).
+// kernels are build_small.cl's), by batch of roots, in either shape (per root, or per level:
+// small_levels.h), and the records the output stage reads.
 #pragma once
 
 #include <vector>
@@ -43,9 +44,15 @@ struct SmallSubtrees {
 
 /// Small-node stage (§4.2): every small root's subtree, in batches of roots whose masks and first
 /// records take at most batch_bytes each. first_scale: the first pass's records per reference
-/// and root (detail::SmallStageLimits).
+/// and root (detail::SmallStageLimits). per_level: built level by level, a work-group per node
+/// (small_levels.h), else a work-item per root (build_small.cl); the records are the same.
 SmallSubtrees run_small_stage(BuildContext& ctx, const SmallRoots& small,
                               const TriangleBounds& triangles, cl_uint first_scale,
-                              std::size_t batch_bytes);
+                              std::size_t batch_bytes, bool per_level);
+
+/// The second pass's places of the batch's subtrees that outgrew their first records (by
+/// out.node_count): batch.second_offset, one entry per root and the total, which it returns.
+cl_uint place_second_pass(BuildContext& ctx, const SmallRoots& small, const SmallSubtrees& out,
+                          SmallBatch& batch);
 
 }  // namespace kdray::build_detail

@@ -49,6 +49,9 @@ class ClDevice {
     /// Whether the device is the host's own processor (PoCL's CPU device, say), where the stages
     /// that are shaped by device kind take their CPU shape. The one place kdray asks the kind.
     bool is_cpu() const { return info_.type == "CPU"; }
+    /// Whether CL_DEVICE_TYPE says GPU: the stages shaped for GPUs (the builder's per-level small
+    /// stage) take that shape by default there.
+    bool is_gpu() const { return info_.type == "GPU"; }
 
     /// A device buffer of `bytes` (at least 1, since OpenCL forbids empty buffers). Throws Error
     /// naming `what` and the size when it exceeds CL_DEVICE_MAX_MEM_ALLOC_SIZE or fails.

@@ -36,6 +36,8 @@
 #include "cl/build/kernels/build_common.cl"
 #include "cl/build/kernels/build_small_reclip.cl"
 #include "cl/build/kernels/build_small_search.cl"
+/* The same stage in the paper's level-parallel shape, in this program (one compile for both). */
+#include "cl/build/kernels/build_small_level.cl"
 
 /* Split candidates (§4.2, "small node preprocessing"): for each candidate plane the set of the
  * root's triangles below it and the set above it, by the same rule as every split (kd_classify

@@ -10,20 +10,36 @@
  * its subtree clips, so a long diagonal triangle that a few splits have cut keeps the root's box:
  * the SAH counts it on both sides of planes it does not reach inside the node, and its own
  * candidates are not its bounds there. A node of at most KDRAY_RECLIP_REFS references of which
- * some extend past its box (at most the batch's reclip_refs) gets a table of its own: those references' triangles clipped to the
- * node's box (the large stage's clipping), the candidates and masks of them over the node's
- * references alone, in private memory; its subtree is split with that table. Only the first such
- * node on a path does this (its descendants use its table), so one table per work-item is live:
- * the walk is depth first, and the nodes pending on the stack above a clipped node are all its
- * descendants. KDRAY_RECLIP_REFS is in kd_build_shared.h; the batch's reclip_refs lowers it. */
+ * some extend past its box (at most the batch's reclip_refs) gets a table of its own: those
+ * references' triangles clipped to the node's box (the large stage's clipping), the candidates and
+ * masks of them over the node's references alone, in private memory; its subtree is split with that
+ * table. Only the first such node on a path does this (its descendants use its table), so one table
+ * per work-item is live: the walk is depth first, and the nodes pending on the stack above a
+ * clipped node are all its descendants. KDRAY_RECLIP_REFS is in kd_build_shared.h; the batch's
+ * reclip_refs lowers it. */
 
 typedef struct KdClippedTable {
     float candidates[KDRAY_RECLIP_REFS * 8]; /* per reference: its clipped box's candidate lanes */
     /* per reference: 8 lanes below, 8 above (as side_masks) */
     uint masks[KDRAY_RECLIP_REFS * KDRAY_MASK_WORDS_PER_REF];
-    uchar ref[KDRAY_RECLIP_REFS];       /* its index in the small root's list */
+    uchar ref[KDRAY_RECLIP_REFS];              /* its index in the small root's list */
     KdTrianglePlane planes[KDRAY_RECLIP_REFS]; /* per reference: its triangle's plane */
 } KdClippedTable;
+
+/* A reference's box *b (its triangle at tri) clipped to a re-clipping node's box: unchanged when
+ * it lies inside, else the triangle's clipped bounds within the old box; 0 when the triangle
+ * misses the node's box (it leaves the node). The one rule of both small-stage shapes
+ * (kd_clip_node_table, and build_small_level.cl's work-groups). */
+inline int kd_reclip_box(KdBox box, __global const float* tri, KdBox* b) {
+    if (!(any(b->lo < box.lo) || any(b->hi > box.hi))) return 1;
+    b->lo = fmax(b->lo, box.lo);
+    b->hi = fmax(fmin(b->hi, box.hi), b->lo);
+    KdBox clipped;
+    if (!kd_clip_triangle_bounds(tri, box, &clipped)) return 0;
+    b->lo = fmin(fmax(b->lo, clipped.lo), b->hi);
+    b->hi = fmax(fmin(b->hi, clipped.hi), b->lo);
+    return 1;
+}
 
 /* The table of the node (box, its references `mask` over the small root's list from start), or 0
  * when none of them extends past the box (clipping changes nothing). *mask becomes the node's
@@ -43,14 +59,7 @@ inline int kd_clip_node_table(KdBox box, ulong* mask, uint start, __global const
         KdBox b = kd_load_box(ref_box, start + j);
         __global const float* tri =
             triangles + (size_t)ref_tri[start + j] * KDRAY_FLOATS_PER_TRIANGLE;
-        if (any(b.lo < box.lo) || any(b.hi > box.hi)) {
-            b.lo = fmax(b.lo, box.lo);
-            b.hi = fmax(fmin(b.hi, box.hi), b.lo);
-            KdBox clipped;
-            if (!kd_clip_triangle_bounds(tri, box, &clipped)) continue;
-            b.lo = fmin(fmax(b.lo, clipped.lo), b.hi);
-            b.hi = fmax(fmin(b.hi, clipped.hi), b.lo);
-        }
+        if (!kd_reclip_box(box, tri, &b)) continue;
         t->ref[n] = (uchar)j;
         t->planes[n] = kd_triangle_plane(tri);
         vstore8((float8)(b.lo.x, b.hi.x, b.lo.y, b.hi.y, b.lo.z, b.hi.z, 0.0f, 0.0f), n,

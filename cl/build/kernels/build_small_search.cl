@@ -138,6 +138,15 @@ inline void kd_price_candidates(KdSplitSearch* s, float8 pos, ulong8 below, ulon
         select(s->lane_candidate, (uint8)(first_candidate) + lane_index, as_uint8(better));
 }
 
+/* The cheapest cost found (C_i N, the leaf's, when no candidate beat it): the cost of
+ * kd_cheapest_candidate's pick, which the per-level stage's work-groups reduce
+ * (build_small_level.cl). */
+inline float kd_cheapest_cost(const KdSplitSearch* s) {
+    const float4 cost4 = fmin(s->lane_cost.lo, s->lane_cost.hi);
+    const float2 cost2 = fmin(cost4.lo, cost4.hi);
+    return fmin(cost2.lo, cost2.hi);
+}
+
 /* The first cheapest candidate of all, in candidate order (reference, then lane), as one loop
  * over every candidate would pick: the least cost, then the least index among the lanes at that
  * cost, by two horizontal minimums (comparing candidate by candidate made a chain of dependent
@@ -145,9 +154,7 @@ inline void kd_price_candidates(KdSplitSearch* s, float8 pos, ulong8 below, ulon
  * branched on every lane, 13%). Lanes 6 and 7, and lanes that found nothing cheaper than the
  * leaf, hold the leaf's cost and NO_CANDIDATE, so they change neither. */
 inline uint kd_cheapest_candidate(const KdSplitSearch* s) {
-    const float4 cost4 = fmin(s->lane_cost.lo, s->lane_cost.hi);
-    const float2 cost2 = fmin(cost4.lo, cost4.hi);
-    const float best_cost = fmin(cost2.lo, cost2.hi);
+    const float best_cost = kd_cheapest_cost(s);
     const uint8 at_best =
         select((uint8)(KDRAY_NO_CANDIDATE), s->lane_candidate, as_uint8(s->lane_cost == best_cost));
     const uint4 index4 = min(at_best.lo, at_best.hi);
