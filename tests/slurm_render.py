@@ -3,11 +3,11 @@
 
 As root: starts munged with a fresh key and slurmctld + slurmd with a slurm.conf generated in a
 temporary folder (their own ports, sockets, state and logs: nothing of the machine's is used),
-submits testdata/anim as a job array of 3 tasks (`sbatch --array=0-2 --wait`), and checks that
-the frames of the shards' stats.json files, merged by frame number, are those of one `kdray render`
-of the whole animation on this machine: the same frames, inputs, images (byte for byte), rays,
-hit pixels, effects, scenes and trees (everything but times and device bytes, which depend on the
-run), and that `kdray stats OUT/shard_* --json` sums them up as one run of the same frames.
+submits testdata/anim as a job array of 3 tasks (`sbatch --array=0-2 --wait`) into one folder,
+and checks that the stats.json the shards merged there holds the frames of one `kdray render` of
+the whole animation on this machine: the same frames, inputs, images (byte for byte), rays, hit
+pixels, effects, scenes and trees (everything but times and device bytes, which depend on the
+run), each shard a run of its own, and that `kdray stats OUT --json` sums up the same frames.
 
 Exits 77 (CTest's SKIP_RETURN_CODE), saying why, when the cluster cannot be had: not root, Slurm
 or munge not installed (scripts/install-deps.sh --slurm), or a daemon that does not come up.
@@ -31,7 +31,8 @@ SHARDS = 3
 SIZE = "64x48"
 # What a frame's record holds that depends on the run, not on the frame: times, and device bytes
 # (buffers left by the previous build are reused, README "Performance").
-RUN_DEPENDENT = {"mrays_per_s", "device_bytes", "device_bytes_per_triangle", "timings_ms"}
+# "run": the index of the run (here, the shard) that rendered the frame into the folder.
+RUN_DEPENDENT = {"mrays_per_s", "device_bytes", "device_bytes_per_triangle", "timings_ms", "run"}
 
 
 class Skip(Exception):
@@ -242,49 +243,51 @@ def main():
         if failures:
             raise RuntimeError()
 
-        # Every shard wrote its own stats.json; its frames merged by frame number are the run's.
+        # The shards merged their frames into the folder's one stats.json.
         reference = json.loads((single / "stats.json").read_text())["frames"]
+        merged_stats = json.loads((out / "stats.json").read_text())
+        runs = merged_stats.get("runs", [])
+        for i, run_record in enumerate(runs):
+            print("run %d: frames %s" % (i, run_record.get("frames_rendered")))
+        if len(runs) != SHARDS:
+            failures.append("stats.json lists %d runs; the array had %d shards" %
+                            (len(runs), SHARDS))
         merged = {}
-        for i in range(SHARDS):
-            shard = out / ("shard_%d" % i)
-            shard_frames = json.loads((shard / "stats.json").read_text())["frames"]
-            print("shard_%d: frames %s" % (i, [f["frame"] for f in shard_frames]))
-            for f in shard_frames:
-                if f["frame"] in merged:
-                    failures.append("frame %d rendered by two shards" % f["frame"])
-                merged[f["frame"]] = (shard, f)
+        for f in merged_stats["frames"]:
+            if f["frame"] in merged:
+                failures.append("frame %d recorded twice" % f["frame"])
+            merged[f["frame"]] = f
         want = [f["frame"] for f in reference]
         if sorted(merged) != want:
-            failures.append("the shards rendered frames %s; one run renders %s" %
+            failures.append("the shards recorded frames %s; one run renders %s" %
                             (sorted(merged), want))
         for f in reference:
             if f["frame"] not in merged:
                 continue
-            shard, g = merged[f["frame"]]
+            g = merged[f["frame"]]
             if stable(f) != stable(g):
                 a, b = stable(f), stable(g)
                 keys = sorted(k for k in set(a) | set(b) if a.get(k) != b.get(k))
                 failures.append("frame %d differs from the single run in %s" % (f["frame"], keys))
-            if (single / f["image"]).read_bytes() != (shard / g["image"]).read_bytes():
+            if (single / f["image"]).read_bytes() != (out / g["image"]).read_bytes():
                 failures.append("frame %d: %s differs from the single run's" %
-                                (f["frame"], shard / g["image"]))
+                                (f["frame"], out / g["image"]))
 
-        # kdray stats reads the shards as one run.
-        stats = subprocess.run([kdray, "stats"] + [str(out / ("shard_%d" % i))
-                                                   for i in range(SHARDS)] + ["--json"],
+        # kdray stats reads the folder as the run.
+        stats = subprocess.run([kdray, "stats", str(out), "--json"],
                                capture_output=True, text=True, timeout=300)
         if stats.returncode != 0:
-            failures.append("kdray stats of the shards exited %d: %s" %
+            failures.append("kdray stats of the folder exited %d: %s" %
                             (stats.returncode, stats.stderr.strip()))
         else:
-            combined = json.loads(stats.stdout).get("combined", {})
-            numbers = combined.get("frame_numbers")
-            if numbers is None or sorted(numbers) != want or combined.get("frames") != len(want):
-                failures.append("kdray stats' combined summary: frames %s, frame_numbers %s; "
-                                "want %d frames %s" % (combined.get("frames"), numbers,
+            summary = json.loads(stats.stdout).get("render", {})
+            numbers = summary.get("frame_numbers")
+            if numbers is None or sorted(numbers) != want or summary.get("frames") != len(want):
+                failures.append("kdray stats' summary: frames %s, frame_numbers %s; "
+                                "want %d frames %s" % (summary.get("frames"), numbers,
                                                        len(want), want))
             else:
-                print("kdray stats combined: %d frames %s" % (combined["frames"], numbers))
+                print("kdray stats: %d frames %s" % (summary["frames"], numbers))
     except RuntimeError:
         pass
     finally:
