@@ -105,22 +105,7 @@ inline uint kd_group_clip_table(KdBox box, ulong mask, uint start, __global cons
                 t->candidates);
     }
     barrier(CLK_LOCAL_MEM_FENCE);
-    if (lid < n) {
-        /* kd_clip_node_table's masks of entry lid over the table (local memory here). */
-        const float8 pos = vload8(lid, t->candidates);
-        const int8 planar_above = kd_planar_above_lanes(pos);
-        uint8 below_bits = (uint8)(0), above_bits = (uint8)(0);
-        for (uint m = 0; m < n; ++m) {
-            const float8 other = vload8(m, t->candidates);
-            int8 is_below, is_above;
-            kd_candidate_sides(pos, planar_above, other.s00224466, other.s11335577, &is_below,
-                               &is_above);
-            below_bits |= as_uint8(is_below) & (1u << m);
-            above_bits |= as_uint8(is_above) & (1u << m);
-        }
-        vstore8(below_bits, 0, t->masks + lid * KDRAY_MASK_WORDS_PER_REF);
-        vstore8(above_bits, 1, t->masks + lid * KDRAY_MASK_WORDS_PER_REF);
-    }
+    if (lid < n) KD_TABLE_ENTRY_MASKS(t, lid, n); /* one entry a work-item, local memory */
     barrier(CLK_LOCAL_MEM_FENCE);
     return n;
 }

@@ -26,6 +26,27 @@ typedef struct KdClippedTable {
     KdTrianglePlane planes[KDRAY_RECLIP_REFS]; /* per reference: its triangle's plane */
 } KdClippedTable;
 
+/* Entry l's masks over the first n entries of table t (each of its six candidates: which entries'
+ * boxes lie below, which above), stored in t->masks. A macro, not a function: the per-root stage's
+ * table is a work-item's (private memory) and the per-level stage's a work-group's (local), and
+ * OpenCL 1.2 has no address space that a function could take both in. */
+#define KD_TABLE_ENTRY_MASKS(t, l, n)                                                              \
+    do {                                                                                           \
+        const float8 pos_ = vload8((l), (t)->candidates);                                          \
+        const int8 planar_above_ = kd_planar_above_lanes(pos_);                                    \
+        uint8 below_bits_ = (uint8)(0), above_bits_ = (uint8)(0);                                  \
+        for (uint m_ = 0; m_ < (n); ++m_) {                                                        \
+            const float8 other_ = vload8(m_, (t)->candidates);                                     \
+            int8 is_below_, is_above_;                                                             \
+            kd_candidate_sides(pos_, planar_above_, other_.s00224466, other_.s11335577,            \
+                               &is_below_, &is_above_);                                            \
+            below_bits_ |= as_uint8(is_below_) & (1u << m_);                                       \
+            above_bits_ |= as_uint8(is_above_) & (1u << m_);                                       \
+        }                                                                                          \
+        vstore8(below_bits_, 0, (t)->masks + (l) * KDRAY_MASK_WORDS_PER_REF);                      \
+        vstore8(above_bits_, 1, (t)->masks + (l) * KDRAY_MASK_WORDS_PER_REF);                      \
+    } while (0)
+
 /* A reference's box *b (its triangle at tri) clipped to a re-clipping node's box: unchanged when
  * it lies inside, else the triangle's clipped bounds within the old box; 0 when the triangle
  * misses the node's box (it leaves the node). The one rule of both small-stage shapes
@@ -66,21 +87,7 @@ inline int kd_clip_node_table(KdBox box, ulong* mask, uint start, __global const
                 t->candidates);
         ++n;
     }
-    for (uint l = 0; l < n; ++l) {
-        const float8 pos = vload8(l, t->candidates);
-        const int8 planar_above = kd_planar_above_lanes(pos);
-        uint8 below_bits = (uint8)(0), above_bits = (uint8)(0);
-        for (uint m = 0; m < n; ++m) {
-            const float8 other = vload8(m, t->candidates);
-            int8 is_below, is_above;
-            kd_candidate_sides(pos, planar_above, other.s00224466, other.s11335577, &is_below,
-                               &is_above);
-            below_bits |= as_uint8(is_below) & (1u << m);
-            above_bits |= as_uint8(is_above) & (1u << m);
-        }
-        vstore8(below_bits, 0, t->masks + l * KDRAY_MASK_WORDS_PER_REF);
-        vstore8(above_bits, 1, t->masks + l * KDRAY_MASK_WORDS_PER_REF);
-    }
+    for (uint l = 0; l < n; ++l) KD_TABLE_ENTRY_MASKS(t, l, n);
     *mask = (1ul << n) - 1ul;
     return 1;
 }
