@@ -280,6 +280,27 @@ def robustness_leaks():
                   *[f"{names.get(m, m)} leaks" for m in modes]], rows, data)
 
 
+# ---- docs/accuracy-vs-time: what the numerics of issue #20 cost ---------------------------------
+
+def numerics_cost():
+    """The refined t and the scene frame, each an A/B of two binaries (scripts/bench_ab.py):
+    the trace, build and frame time of the animations, head over base."""
+    rows, sources = [], []
+    for stem, what in (("refined-t-ab", "refined t (against float t)"),
+                       ("scene-frame-ab", "scene frame (against coordinates as read)")):
+        data = load(stem)
+        sources.append(data)
+        by_what = {r["what"]: r for r in data.rows}
+        for scene in ("bart-kitchen", "bart-robots"):
+            cells = []
+            for part in ("trace_ms", "build_ms", "frame_ms"):
+                r = by_what.get(f"render {scene}: {part} per frame")
+                cells.append(f"{r['head_over_base']:.2f}" if r else "")
+            rows.append([what, scene, *cells])
+    return table(["what it adds", "animation", "trace time", "build time", "frame time"], rows,
+                 sources)
+
+
 # ---- docs/reliability.md: the fuzz runs ----------------------------------------------------------
 
 def fuzz_runs():
@@ -303,6 +324,7 @@ TABLES = {
     "robustness-speed": robustness_speed,
     "robustness-leaks": robustness_leaks,
     "fuzz-runs": fuzz_runs,
+    "numerics-cost": numerics_cost,
 }
 
 
