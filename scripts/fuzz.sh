@@ -26,6 +26,9 @@ case "${2:-}" in
 esac
 
 scripts/install-deps.sh --fuzz
+# The commit the targets are built at: the record names it, though the run ends much later.
+commit=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
+git diff --quiet HEAD 2>/dev/null || commit="$commit-dirty"
 build_dir=build-fuzz
 CC=clang CXX=clang++ cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DKDRAY_FUZZ=ON -DKDRAY_BUILD_TESTS=OFF >/dev/null
@@ -56,6 +59,7 @@ for target in obj render_file mtl tree_file; do
         "$logs/fuzz-0.log" || true
 done
 if [[ $record -eq 1 ]]; then
-    python3 scripts/fuzz_record.py "$seconds" --build-dir "$build_dir" --command "scripts/fuzz.sh $*"
+    python3 scripts/fuzz_record.py "$seconds" --build-dir "$build_dir" --command "scripts/fuzz.sh $*" \
+        --commit "$commit"
 fi
 exit $status

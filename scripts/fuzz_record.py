@@ -46,11 +46,15 @@ def main():
     parser.add_argument("--build-dir", default=os.path.join(ROOT, "build-fuzz"))
     parser.add_argument("--out", default=os.path.join(ROOT, "docs", "fuzz-runs.json"))
     parser.add_argument("--command", help="the command to record (default: this one)")
+    parser.add_argument("--commit", help="the commit the fuzz targets were built at (default: "
+                                         "the checkout's now)")
     args = parser.parse_args()
     rows = [target_row(args.build_dir, t, args.seconds) for t in TARGETS]
     record = run_record(os.path.join(ROOT, "build", "kdray"))  # the machine's devices, if built
     if args.command:
         record["command"] = args.command
+    if args.commit:
+        record["commit"] = args.commit
     write_json(args.out, {**record, "rows": rows})
     for r in rows:
         print(f"{r['target']}: {r['executions']} executions in {r['seconds']} s, "
