@@ -1,11 +1,16 @@
 // test_device_failures.cpp — what a user sees when the OpenCL side fails: no platform at all, a
-// kernel that does not compile, and an allocation larger than the device allows. Each must be a
-// kdray::Error that says what happened and what to do, never a crash.
+// kernel that does not compile, an allocation larger than the device allows, and a frame larger
+// than its memory. Each must be a kdray::Error that says what happened and what to do, never a
+// crash.
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "cl/runtime/device.h"
 #include "cl/runtime/program_cache.h"
@@ -57,4 +62,36 @@ TEST_CASE("an allocation beyond the device's limit names the size asked for") {
         CHECK(message.find(std::to_string(too_big)) != std::string::npos);
         CHECK(message.find("the triangles of a huge scene") != std::string::npos);
     }
+}
+
+TEST_CASE("a frame larger than the device's memory is refused with the figures, before it traces") {
+    // PoCL's POCL_MEMORY_LIMIT (GiB) gives its CPU device 1 GiB: a 6000 x 6000 frame's per-pixel
+    // buffers need more, and the host has room for them. Another OpenCL implementation ignores
+    // the variable; then the device's real size decides, and the case says so and stops.
+    ::setenv("POCL_MEMORY_LIMIT", "1", 1);
+    const test::CommandResult devices = test::run_kdray({"stats", "--json"});
+    const auto dir = test::fresh_temp_dir("device-memory");
+    const auto obj = test::write_text_file(dir / "t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const auto camera = test::write_text_file(
+        dir / "c.json",
+        R"({"image":{"width":64,"height":48},"camera":{"position":[0.3,0.3,3],"look_at":[0.3,0.3,0]}})");
+    const test::CommandResult r =
+        test::run_kdray({"render", obj.string(), "--camera", camera.string(), "--size", "6000x6000",
+                         "-o", (dir / "out").string(), "-q"},
+                        120);
+    ::unsetenv("POCL_MEMORY_LIMIT");
+    const nlohmann::json listed = nlohmann::json::parse(devices.out);
+    const std::uint64_t global = listed["devices"][0].value("global_mem_bytes", std::uint64_t(0));
+    if (global != (std::uint64_t(1) << 30)) {
+        MESSAGE("the first device ignores POCL_MEMORY_LIMIT (not PoCL): skipped");
+        return;
+    }
+    INFO("stderr: " << r.err);
+    CHECK(r.status == 1);
+    CHECK(r.err.rfind("kdray: error: a 6000 x 6000 frame needs about ", 0) == 0);
+    CHECK(r.err.find("MiB of device memory") != std::string::npos);
+    CHECK(r.err.find("has 1024 MiB") != std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(!std::filesystem::exists(dir / "out" / "t.png"));
+    CHECK(!std::filesystem::exists(dir / "out" / "stats.json"));
 }
