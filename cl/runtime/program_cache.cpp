@@ -28,7 +28,10 @@ std::function<void(const ProgramBuildEvent&)> build_listener;  // under cache_mu
 
 cl::Program cached_program(const ClDevice& device, std::string_view file,
                            const std::string& defines) {
-    const std::string options = "-cl-std=CL1.2" + (defines.empty() ? "" : " " + defines);
+    // -w: PoCL prints its compiler's warnings on stderr ("145 warnings generated.", clang's
+    // -Wpsabi notes on 16-lane vectors wherever the CPU lacks AVX-512), where they would land
+    // between kdray's own lines; errors still fail the build with the log.
+    const std::string options = "-cl-std=CL1.2 -w" + (defines.empty() ? "" : " " + defines);
     ProgramKey key{device.context()(), device.device()(), std::string(file), options};
     std::lock_guard<std::mutex> lock(cache_mutex);
     if (auto it = cache.find(key); it != cache.end()) return it->second;

@@ -18,8 +18,8 @@
 namespace kdray {
 
 /// The program of embedded kernel file `file` ("primitives.cl") built for `device` with the
-/// options "-cl-std=CL1.2 <defines>". Thread-safe. A failed build throws Error with the build
-/// log, the device's name and the options.
+/// options "-cl-std=CL1.2 -w <defines>" (-w: no warnings on stderr). Thread-safe. A failed build
+/// throws Error with the build log, the device's name and the options.
 cl::Program cached_program(const ClDevice& device, std::string_view file,
                            const std::string& defines = "");
 
