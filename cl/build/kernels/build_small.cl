@@ -209,32 +209,22 @@ __kernel void kd_build_small_subtrees(
             below = vload8(0, masks);
             above = vload8(1, masks);
         }
-        float candidate_pos[8];
-        vstore8(pos, 0, candidate_pos);
-        const float split = candidate_pos[k];
-        ulong children[2][8];
-        {
-            float8 lo, hi;
-            kd_box_lanes(node.box, &lo, &hi);
-            long8 valid;
-            kd_candidate_children((ulong8)(node.mask), below, above, pos, lo, hi, &below, &above,
-                                  &valid);
-            vstore8(below, 0, children[0]);
-            vstore8(above, 0, children[1]);
-        }
-        kd_drop_missed_triangles(&children[0][k], &children[1][k], node.box, axis, split, start,
+        ulong children[2];
+        const float split = kd_split_at_candidate(pos, below, above, node.mask, node.box, k,
+                                                  &children[0], &children[1]);
+        kd_drop_missed_triangles(&children[0], &children[1], node.box, axis, split, start,
                                  node_table, ref_tri, triangles);
         if (at < budget) out[at] = kd_small_inner(axis, split);
         KdPendingNode pending;
         pending.box = kd_child_box(node.box, axis, split, 1);
-        pending.mask = children[1][k];
+        pending.mask = children[1];
         pending.depth = node.depth + 1;
         pending.parent = at;
         pending.parent_axis = axis;
         pending.on_table = node.on_table;
         stack[top++] = pending;
         node.box = kd_child_box(node.box, axis, split, 0);
-        node.mask = children[0][k];
+        node.mask = children[0];
         node.depth += 1;
         node.parent = KDRAY_NO_CANDIDATE;
     }

@@ -240,23 +240,14 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
         below = vload8(0, masks);
         above = vload8(1, masks);
     }
-    float candidate_pos[8];
-    vstore8(pos, 0, candidate_pos);
-    const float split = candidate_pos[k];
-    ulong children[2][8];
-    {
-        float8 lo, hi;
-        kd_box_lanes(box, &lo, &hi);
-        long8 valid;
-        kd_candidate_children((ulong8)(mask), below, above, pos, lo, hi, &below, &above, &valid);
-        vstore8(below, 0, children[0]);
-        vstore8(above, 0, children[1]);
-    }
+    ulong children[2];
+    const float split =
+        kd_split_at_candidate(pos, below, above, mask, box, k, &children[0], &children[1]);
     /* kd_drop_missed_triangles, a straddling triangle per work-item: one whose plane misses a
      * child's box leaves that child. */
     if (lid < 4) scratch[3 + lid] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
-    const ulong straddle = children[0][k] & children[1][k];
+    const ulong straddle = children[0] & children[1];
     if ((straddle >> lid) & 1ul) {
         const KdTrianglePlane plane =
             on_table ? table.planes[lid]
@@ -270,8 +261,8 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     if (lid != 0) return;
-    const ulong child_mask[2] = {children[0][k] & ~kd_join_mask(scratch[3], scratch[4]),
-                                 children[1][k] & ~kd_join_mask(scratch[5], scratch[6])};
+    const ulong child_mask[2] = {children[0] & ~kd_join_mask(scratch[3], scratch[4]),
+                                 children[1] & ~kd_join_mask(scratch[5], scratch[6])};
     const uint child = atomic_add(next_free, 2u);
     nodes[id].axis = axis;
     nodes[id].split = split;

@@ -59,6 +59,26 @@ inline void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above, float
     *valid = convert_long8((lo_lane | hi_lane) & (pos > lo) & (pos < hi)) | at_lo | at_hi;
 }
 
+/* The children (their triangle masks) of a node (triangles `mask`, box) split at candidate k of a
+ * reference whose candidate lanes are pos and masks below and above (kd_candidate_children), and
+ * the split plane's position. The one split of both small-stage shapes, so that their trees are
+ * the same. */
+inline float kd_split_at_candidate(float8 pos, ulong8 below, ulong8 above, ulong mask, KdBox box,
+                                   uint k, ulong* below_child, ulong* above_child) {
+    float candidate_pos[8];
+    vstore8(pos, 0, candidate_pos);
+    ulong children[2][8];
+    float8 lo, hi;
+    kd_box_lanes(box, &lo, &hi);
+    long8 valid;
+    kd_candidate_children((ulong8)(mask), below, above, pos, lo, hi, &below, &above, &valid);
+    vstore8(below, 0, children[0]);
+    vstore8(above, 0, children[1]);
+    *below_child = children[0][k];
+    *above_child = children[1][k];
+    return candidate_pos[k];
+}
+
 /* The SAH split of one small node (§4.2): for every candidate of the node's triangles inside the
  * node's box, or on its faces as kd_candidate_children allows, SAH(x) = C_t + C_i (N_L SA_L +
  * N_R SA_R) / SA, the counts by popcount of the children's masks, scaled by (1 - empty_bonus)
