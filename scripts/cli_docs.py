@@ -11,6 +11,7 @@ one space and its type (an upper-case word such as TEXT or INT, followed by `:{a
 values are enumerated, `=default` when it has one) or at least two spaces and its description.
 """
 import argparse
+import os
 import re
 import subprocess
 import sys
@@ -98,8 +99,14 @@ def completion(kdray, template, output):
     text = open(template).read()
     if "@KDRAY_GENERATED@" not in text:
         sys.exit("cli_docs: %s has no @KDRAY_GENERATED@" % template)
+    write_output(output, text.replace("@KDRAY_GENERATED@", "\n".join(out)))
+
+
+def write_output(output, text):
+    """Writes a generated file, making its folder: a fresh build folder has none."""
+    os.makedirs(os.path.dirname(os.path.abspath(output)), exist_ok=True)
     with open(output, "w") as f:
-        f.write(text.replace("@KDRAY_GENERATED@", "\n".join(out)))
+        f.write(text)
 
 
 def roff(text):
@@ -126,8 +133,7 @@ def man_include(kdray, output):
                                                    " \\fI" + roff(e["type"]) + "\\fR"
                                                    if e["type"] else ""))
                 out.append(roff(e["description"]))
-    with open(output, "w") as f:
-        f.write("\n".join(out) + "\n")
+    write_output(output, "\n".join(out) + "\n")
 
 
 def main():
