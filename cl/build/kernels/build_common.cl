@@ -223,4 +223,17 @@ inline KdSmallNode kd_small_leaf(uint first, uint count, ulong mask) {
     return n;
 }
 
+/* Preorder placement of an inner node's children, given where the node and its first leaf
+ * reference go: the below child right after its parent, the above child after the below child's
+ * subtree (subtree_nodes and subtree_refs: each subtree's node and leaf reference counts). The one
+ * rule of the output stage and of the per-level small stage. */
+inline void kd_place_children(uint id, uint below, uint above, __global const uint* subtree_nodes,
+                              __global const uint* subtree_refs, __global uint* position,
+                              __global uint* leaf_position) {
+    position[below] = position[id] + 1;
+    position[above] = position[id] + 1 + subtree_nodes[below];
+    leaf_position[below] = leaf_position[id];
+    leaf_position[above] = leaf_position[id] + subtree_refs[below];
+}
+
 #endif /* KDRAY_BUILD_COMMON_CL */

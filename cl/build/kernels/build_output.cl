@@ -40,11 +40,8 @@ __kernel void kd_place_subtrees(uint begin, uint count, __global const KdBuildNo
     const uint id = begin + k;
     const KdBuildNode n = records[id];
     if (n.axis == KDRAY_LEAF_AXIS || n.axis == KDRAY_SMALL_ROOT_AXIS) return;
-    const uint below = n.child[0], above = n.child[1];
-    position[below] = position[id] + 1;
-    position[above] = position[id] + 1 + subtree_nodes[below];
-    leaf_position[below] = leaf_position[id];
-    leaf_position[above] = leaf_position[id] + subtree_refs[below];
+    kd_place_children(id, n.child[0], n.child[1], subtree_nodes, subtree_refs, position,
+                      leaf_position);
 }
 
 /* Nodes of the large stage; its leaves list their triangles in the builder's leaf store. */

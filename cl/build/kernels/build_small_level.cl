@@ -318,10 +318,8 @@ __kernel void kd_place_small_level(uint begin, uint count, __global const KdSmal
     const uint id = begin + k;
     const KdSmallLevelNode n = nodes[id];
     if (n.axis == KDRAY_LEAF_AXIS) return;
-    position[n.child] = position[id] + 1;
-    position[n.child + 1] = position[id] + 1 + subtree_nodes[n.child];
-    leaf_position[n.child] = leaf_position[id];
-    leaf_position[n.child + 1] = leaf_position[id] + subtree_refs[n.child];
+    kd_place_children(id, n.child, n.child + 1, subtree_nodes, subtree_refs, position,
+                      leaf_position);
 }
 
 /* Per root of the batch (its first-level node g): its subtree's node and leaf reference counts,
