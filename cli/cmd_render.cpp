@@ -1,7 +1,5 @@
 // `kdray render FRAME.obj... -o OUTDIR`: per frame, load, build, trace and write the image (and
-// the hit AOV), then OUTDIR/stats.json for the run. Every file appears whole or not at all.
-#include <unistd.h>
-
+// the hit AOV), then the run merged into OUTDIR/stats.json. Every file appears whole or not at all.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -29,7 +27,6 @@
 #include "core/render_setup.h"
 #include "core/render_stats.h"
 #include "core/scene.h"
-#include "core/stats_json.h"
 #include "core/version.h"
 
 namespace kdray::cli {
