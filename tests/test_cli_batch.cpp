@@ -311,16 +311,22 @@ TEST_CASE("scenes rendered one by one into a folder each keep their record") {
 
 TEST_CASE("a bad first input: a later range frames its own first frame, with a warning") {
     const fs::path dir = fresh_temp_dir("cli-bad-first");
+    // All three in one folder: kdray sorts its inputs by path, and the bad frame must sort first
+    // wherever the temporary folder lies beside the source tree.
     std::vector<std::string> frames = anim_frames(3);
-    const fs::path bad = write_text_file(dir / "in" / "frame_000.obj", "v 0 0 nan\n");
-    frames[0] = bad.string();
+    write_text_file(dir / "in" / "frame_000.obj", "v 0 0 nan\n");
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        const fs::path copy = dir / "in" / fs::path(frames[i]).filename();
+        if (i > 0) fs::copy_file(frames[i], copy);
+        frames[i] = copy.string();
+    }
     const CommandResult r = render(frames, dir / "out", "reference", {"--frames", "1:2", "-q"});
     CHECK(r.status == 0);
     CHECK(r.err.find("kdray: warning: ") != std::string::npos);
     CHECK(r.err.find("frame_000.obj:1") != std::string::npos);
     CHECK(r.err.find("frames its own first frame, 1") != std::string::npos);
     // Framed on frame 1, exactly as a run that starts there would be.
-    const std::vector<std::string> good = {anim_frames(3)[1], anim_frames(3)[2]};
+    const std::vector<std::string> good = {frames[1], frames[2]};
     REQUIRE(render(good, dir / "alone", "reference", {"-q"}).status == 0);
     CHECK(read_file(dir / "out" / "frame_001.png") == read_file(dir / "alone" / "frame_001.png"));
 }
