@@ -1,10 +1,10 @@
-// sanitizer_leak_probe.cpp — the sanitizer build's check of its own leak suppressions
-// (tests/lsan.supp). They must cover what the OpenCL runtime keeps alive until exit by design (its
-// platform and device state, the compiler's) and nothing kdray allocates through it. So this
-// program does what a build does, opening a device, compiling a program, creating a kernel,
-// filling and reading a buffer and waiting on an event, and then releases all of it: under
-// LeakSanitizer it must exit 0. With --leak-buffer it keeps one reference to its buffer's cl_mem,
-// as a kdray that forgot a buffer would, and LeakSanitizer must report that leak.
+// sanitizer_leak_probe.cpp — the sanitizer build's check of its leak checks. LeakSanitizer's
+// suppressions (tests/lsan.supp) hide what the OpenCL runtime keeps alive until exit (its platform
+// and device state, the compiler's), and with it every cl_mem, so ClDevice checks kdray's buffers
+// itself. This program does what a build does, opening a device, compiling a program, creating a
+// kernel, filling and reading a buffer and waiting on an event, and then releases all of it: it
+// must exit 0. With --leak-buffer it keeps one reference to its buffer's cl_mem, as a kdray that
+// forgot a buffer would, and closing the device must name that buffer and fail.
 #include <cstdio>
 #include <cstring>
 #include <exception>

@@ -16,11 +16,17 @@ using namespace kdray::test;
 
 namespace {
 
-HitBuffer buffer(const std::vector<KdHit>& hits) {
+struct PixelHit {
+    float t;
+    kd_u32 prim;
+};
+
+/// One row of hits; the comparison reads only t and the triangle id.
+HitBuffer buffer(const std::vector<PixelHit>& pixels) {
     HitBuffer b;
-    b.width = int(hits.size());
+    b.width = int(pixels.size());
     b.height = 1;
-    b.hits = hits;
+    for (const PixelHit& p : pixels) b.hits.push_back(KdHit{p.t, p.prim, 0.0f, 0.0f});
     return b;
 }
 

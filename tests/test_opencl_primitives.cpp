@@ -62,6 +62,25 @@ TEST_CASE("opencl device: listing, default selection and bad selectors") {
     CHECK_THROWS_AS(ClDevice("no-such-device-kdray"), Error);
 }
 
+TEST_CASE("a device lists the buffers it allocated until the runtime deletes them") {
+    // The sanitizer build's check of kdray's own buffers (device.cpp) rests on this ledger: a
+    // buffer named while any reference to it lives, and no longer once the last is released.
+    ClDevice& device = test::opencl_test_device();
+    const auto named = [&](const std::string& what) {
+        const std::vector<std::string> live = device.live_buffers();
+        return std::count(live.begin(), live.end(), what);
+    };
+    {
+        cl::Buffer buffer = device.allocate(4096, "ledger test buffer");
+        cl::Buffer copy = buffer;
+        CHECK(named("ledger test buffer") == 1);
+        buffer = cl::Buffer();
+        CHECK(named("ledger test buffer") == 1);  // the copy still holds it
+    }
+    device.queue().finish();
+    CHECK(named("ledger test buffer") == 0);
+}
+
 TEST_CASE("opencl errors carry the call and the code's name") {
     CHECK(cl_error_name(CL_OUT_OF_RESOURCES) == "CL_OUT_OF_RESOURCES");
     CHECK(cl_error_name(CL_MEM_OBJECT_ALLOCATION_FAILURE) == "CL_MEM_OBJECT_ALLOCATION_FAILURE");

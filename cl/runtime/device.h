@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,8 @@ struct ClDeviceInfo {
 /// PoCL, when the ICD loader finds no platform at all.
 std::vector<ClDeviceInfo> list_cl_devices();
 
+struct BufferLedger;
+
 /// An opened device: its context, one in-order command queue, and the buffers that finished builds
 /// gave back (BufferPool).
 class ClDevice {
@@ -41,6 +44,12 @@ class ClDevice {
     /// that index of list_cl_devices(); anything else picks the first device whose name contains
     /// it (case-insensitive). Throws Error listing the devices when nothing matches.
     explicit ClDevice(const std::string& selector = "");
+    /// Releases the kept buffers; in a sanitizer build (KDRAY_SANITIZE) a buffer of allocate()'s
+    /// still alive then is reported by its name and fails the process (exit 23, as LeakSanitizer
+    /// does): LeakSanitizer itself cannot tell kdray's buffers from the runtime's own memory.
+    ~ClDevice();
+    ClDevice(const ClDevice&) = delete;
+    ClDevice& operator=(const ClDevice&) = delete;
 
     const cl::Context& context() const { return context_; }
     const cl::Device& device() const { return device_; }
@@ -59,6 +68,9 @@ class ClDevice {
     /// The bytes of every buffer allocate() has made: what reuse (DeviceMemory, BufferPool)
     /// saved shows as bytes not allocated (tests).
     std::uint64_t allocated_bytes() const { return allocated_bytes_; }
+    /// The names (allocate's `what`) of the buffers allocate() made that the runtime has not
+    /// deleted yet: every reference to them released, and the commands using them done.
+    std::vector<std::string> live_buffers() const;
 
     /// Buffers kept for the next build: at most an eighth of the device's memory, and 1 GiB.
     BufferPool& buffer_pool() { return buffer_pool_; }
@@ -70,6 +82,7 @@ class ClDevice {
     ClDeviceInfo info_;
     BufferPool buffer_pool_;
     mutable std::uint64_t allocated_bytes_ = 0;
+    std::shared_ptr<BufferLedger> ledger_;  // the buffers of allocate() not deleted yet
 };
 
 /// The devices on one line, for error messages: "0: NAME (VENDOR, TYPE, VERSION); 1: ...".
