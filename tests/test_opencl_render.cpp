@@ -48,6 +48,11 @@ Camera skew_camera(const Scene& scene) {
     return c;
 }
 
+/// The hard scene's own camera where it has one, else skew_camera.
+Camera camera_of(const test::NamedScene& s) {
+    return s.camera ? *s.camera : skew_camera(s.scene);
+}
+
 double rgb_rmse(const Image& a, const Image& b) {
     double sum = 0;
     for (std::size_t i = 0; i < a.rgb.size(); ++i)
@@ -71,7 +76,7 @@ TEST_CASE("opencl render: centre hits equal brute force and the reference on the
         CAPTURE(s.name);
         const KdTree tree = build_reference(s.scene);
         RenderSettings settings = small_settings(40, 30);
-        const RenderInputs inputs = prepare_render(s.scene, settings, skew_camera(s.scene), 0);
+        const RenderInputs inputs = prepare_render(s.scene, settings, camera_of(s), 0);
         const FrameResult device = render_opencl(test::opencl_test_device(), tree, s.scene, inputs);
         const FrameResult host = render_reference(tree, s.scene, inputs, 1);
         int against_brute = 0, against_reference = 0, hits = 0;
@@ -266,7 +271,7 @@ TEST_CASE("opencl render: packets of primary rays give the reference's hits bit 
         CAPTURE(s.name);
         const KdTree tree = build_reference(s.scene);
         const RenderInputs inputs =
-            prepare_render(s.scene, small_settings(37, 29), skew_camera(s.scene), 0);
+            prepare_render(s.scene, small_settings(37, 29), camera_of(s), 0);
         check_packets(s.scene, tree, inputs);
     }
     SUBCASE("spp 3: three jittered samples and the centre ray per pixel, one packet each") {
