@@ -20,6 +20,10 @@
 /* Floats per box in the builder's box arrays: lo.xyz hi.xyz (sizeof(KdBuildBox) / 4). */
 #define KDRAY_BOX_FLOATS 6
 
+/* Elements per chunk of the segmented box reduction (primitives.cl), and so references per
+ * reduction chunk of a large node, the unit the large stage's passes go by (build_large.cl). */
+#define KDRAY_REDUCE_CHUNK 256u
+
 /* KdBuildNode.axis of a small root: the small stage writes its subtree, and leaf_first is the
  * small root's index. */
 #define KDRAY_SMALL_ROOT_AXIS 4u
