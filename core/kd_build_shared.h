@@ -63,10 +63,11 @@
 #define KDRAY_MASK_WORDS_PER_REF 16u
 #define KDRAY_MASK_BYTES_PER_REF (KDRAY_MASK_WORDS_PER_REF * 8u)
 
-/* Work-items of one work-group of the per-level small stage (build_small_level.cl): one per
- * reference a small node may hold (KDRAY_SMALL_ROOT_MAX_REFS), and the work-group size of every
- * launch (cl/runtime/launch.h's kLaunchGroup, which the host static_asserts equal). */
-#define KDRAY_SMALL_LEVEL_GROUP 64u
+/* Work-items of every work-group the builder launches (cl/runtime/launch.h rounds each launch's
+ * size up to a multiple of it): one per reference a small node may hold, since the per-level
+ * small stage (build_small_level.cl) splits one node per work-group, work-item j pricing the
+ * node's j-th reference. */
+#define KDRAY_LAUNCH_GROUP 64u
 
 /* KdBuildBox — 24 bytes. lo[3], hi[3]: the box's corners. */
 typedef struct KdBuildBox {
@@ -239,6 +240,8 @@ typedef struct KdSmallBatchArgs {
 } KdSmallBatchArgs;
 
 #ifndef KDRAY_DEVICE_CODE
+static_assert(KDRAY_LAUNCH_GROUP == KDRAY_SMALL_ROOT_MAX_REFS,
+              "kd_split_small_level prices a node's references one per work-item of its group");
 static_assert(sizeof(KdBuildBox) == KDRAY_BOX_FLOATS * sizeof(kd_f32), "KdBuildBox is 24 bytes");
 static_assert(sizeof(KdBuildNode) == 24, "KdBuildNode is 24 bytes on every device");
 static_assert(sizeof(KdSmallNode) == 16, "KdSmallNode is 16 bytes on every device");
