@@ -58,6 +58,11 @@
  * references whose lo and whose hi fall in the bin. */
 #define KDRAY_BIN_COUNTS 6u
 
+/* Split candidates per small-root reference: the planes of its box's lo and hi on each axis
+ * (candidate k of a reference: axis k / 2, its hi when k is odd), numbered reference by
+ * reference, so that candidate c is candidate c % 6 of reference c / 6 (build_small_search.cl). */
+#define KDRAY_CANDIDATES_PER_REF 6u
+
 /* Split-candidate masks per small-root reference (build_small.cl): 6 candidates below and 6
  * above, each group padded to 8 ulongs, so that a reference's masks load as two ulong8. */
 #define KDRAY_MASK_WORDS_PER_REF 16u

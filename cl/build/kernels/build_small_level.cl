@@ -186,13 +186,13 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
                     &s, vload8(lid, table.candidates),
                     convert_ulong8(vload8(0, table.masks + lid * KDRAY_MASK_WORDS_PER_REF)),
                     convert_ulong8(vload8(1, table.masks + lid * KDRAY_MASK_WORDS_PER_REF)),
-                    lid * 6);
+                    lid * KDRAY_CANDIDATES_PER_REF);
             else
                 kd_price_candidates(
                     &s, kd_candidate_lanes(ref_box + (size_t)(start + lid) * KDRAY_BOX_FLOATS),
                     vload8(0, root_masks + (size_t)lid * KDRAY_MASK_WORDS_PER_REF),
                     vload8(1, root_masks + (size_t)lid * KDRAY_MASK_WORDS_PER_REF),
-                    (start + lid) * 6);
+                    (start + lid) * KDRAY_CANDIDATES_PER_REF);
         }
         group_candidate[lid] = kd_cheapest_candidate(&s);
         group_cost[lid] = kd_cheapest_cost(&s);
@@ -227,7 +227,8 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
     }
 
     /* Inner node: the children of the best candidate, as kd_build_small_subtrees makes them. */
-    const uint ref = best / 6, k = best % 6, axis = k / 2;
+    const uint ref = best / KDRAY_CANDIDATES_PER_REF, k = best % KDRAY_CANDIDATES_PER_REF,
+               axis = k / 2;
     float8 pos;
     ulong8 below, above;
     if (on_table) {

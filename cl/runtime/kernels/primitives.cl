@@ -8,7 +8,7 @@
  * miscompiling barriers inside loops; on a 2-core CPU it is also what runs fastest, since a
  * work-group's items run one after another anyway.
  *
- * Boxes are 6 floats: lo.xyz, hi.xyz. An empty box is lo = +inf, hi = -inf. */
+ * Boxes are KDRAY_BOX_FLOATS (6) floats: lo.xyz, hi.xyz. An empty box is lo = +inf, hi = -inf. */
 #include "core/kd_shared.h"
 #include "core/kd_build_shared.h"
 
@@ -69,12 +69,12 @@ __kernel void kd_compact_by_flags(__global const uint* values, __global const ui
     if (k < n && flags[k]) out[positions[k]] = values[k];
 }
 
-/* out = the union of boxes[first .. end) (6 floats each: lo.xyz hi.xyz); an empty range gives
+/* out = the union of boxes[first .. end) (lo.xyz hi.xyz each); an empty range gives
  * lo = +inf, hi = -inf. Both steps of the segmented reduction below are this loop. */
 inline void kd_union_boxes(__global const float* boxes, uint first, uint end, __global float* out) {
     float3 bmin = (float3)(INFINITY), bmax = (float3)(-INFINITY);
     for (uint k = first; k < end; ++k) {
-        __global const float* b = boxes + (size_t)k * 6;
+        __global const float* b = boxes + (size_t)k * KDRAY_BOX_FLOATS;
         bmin = fmin(bmin, (float3)(b[0], b[1], b[2]));
         bmax = fmax(bmax, (float3)(b[3], b[4], b[5]));
     }
@@ -103,7 +103,7 @@ __kernel void kd_reduce_box_chunks(__global const float* boxes, __global const u
     const uint local_chunk = c - chunk_start[s];
     const uint begin = seg_start[s] + local_chunk * KDRAY_REDUCE_CHUNK;
     const uint end = min(seg_start[s] + seg_count[s], begin + KDRAY_REDUCE_CHUNK);
-    kd_union_boxes(boxes, begin, end, chunk_boxes + (size_t)c * 6);
+    kd_union_boxes(boxes, begin, end, chunk_boxes + (size_t)c * KDRAY_BOX_FLOATS);
 }
 
 /* Segmented reduction, step 2: segment s's box is the union of its chunks' boxes. */
@@ -112,7 +112,8 @@ __kernel void kd_reduce_box_segments(__global const float* chunk_boxes,
                                      __global float* seg_boxes) {
     const uint s = get_global_id(0);
     if (s >= segments) return;
-    kd_union_boxes(chunk_boxes, chunk_start[s], chunk_start[s + 1], seg_boxes + (size_t)s * 6);
+    kd_union_boxes(chunk_boxes, chunk_start[s], chunk_start[s + 1],
+                   seg_boxes + (size_t)s * KDRAY_BOX_FLOATS);
 }
 
 /* Chunks per segment, for the scan that gives chunk_start: ceil(count / KDRAY_REDUCE_CHUNK). */
