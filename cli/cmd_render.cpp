@@ -270,10 +270,7 @@ int run_render(const RenderCommand& command) {
 
     nlohmann::json frames = nlohmann::json::array(), failures = nlohmann::json::array();
     std::string effects_said;  // the effects the log last named
-    const std::string builder_quality =
-        command.builder.builder == "opencl"
-            ? build_quality_of(command.builder.build_params(default_quality))
-            : std::string("exact (reference)");
+    const std::string builder_quality = builder->quality();
     auto run_start = FrameClock::now();
     std::size_t done = 0;
     for (; done < selected.size() && !interrupted; ++done) {

@@ -45,8 +45,9 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
     app.add_option("--large-threshold", o.params.large_node_threshold,
                    "OpenCL builder: nodes with more triangles are 'large' (empty-space cuts, then "
                    "a binned-SAH or median split); the rest get the full SAH (Zhou et al.'s T, "
-                   "at most 64)")
-        ->check(CLI::Range(1, 64))
+                   "at most " +
+                       std::to_string(KDRAY_SMALL_ROOT_MAX_REFS) + ")")
+        ->check(CLI::Range(1, KDRAY_SMALL_ROOT_MAX_REFS))
         ->capture_default_str();
     app.add_option("--empty-ratio", o.params.empty_space_ratio,
                    "OpenCL builder: cut off empty space larger than this share of a large "

@@ -13,10 +13,15 @@ namespace kdray {
 namespace {
 
 template <class T>
-[[noreturn]] void reject(const char* what, const char* option, T value, const char* rule) {
+[[noreturn]] void reject(const char* what, const char* option, T value, const std::string& rule) {
     std::ostringstream s;
     s << what << " (" << option << ") must be " << rule << ", not " << value;
     throw Error(s.str());
+}
+
+/// "an integer from LO to HI", the rule of a parameter bounded by the builders' constants.
+std::string integer_rule(int lo, int hi) {
+    return "an integer from " + std::to_string(lo) + " to " + std::to_string(hi);
 }
 
 }  // namespace
@@ -47,22 +52,24 @@ void validate_build_params(const BuildParams& p) {
         reject("the SAH cost of a triangle test C_i", "--ci", ci, "a finite number > 0");
     if (!(p.empty_bonus >= 0 && p.empty_bonus < 1))
         reject("the empty-space bonus", "empty_bonus", p.empty_bonus, "in [0, 1)");
-    if (p.large_node_threshold < 1 || p.large_node_threshold > 64)
+    // A large node holds more than T references and a small root at most T, which its masks bound.
+    if (p.large_node_threshold < 1 || p.large_node_threshold > KDRAY_SMALL_ROOT_MAX_REFS)
         reject("the large-node threshold T", "--large-threshold", p.large_node_threshold,
-               "an integer from 1 to 64");
+               integer_rule(1, KDRAY_SMALL_ROOT_MAX_REFS));
     if (!(p.empty_space_ratio >= 0 && p.empty_space_ratio <= 1))
         reject("the empty-space ratio C_e", "--empty-ratio", p.empty_space_ratio, "in [0, 1]");
     if (p.large_split_bins < 0 || p.large_split_bins > kMaxLargeSplitBins)
         reject("the large-node SAH bins", "--large-bins", p.large_split_bins,
-               "an integer from 0 to 64");
+               integer_rule(0, kMaxLargeSplitBins));
     if (p.small_reclip_refs < 0 || p.small_reclip_refs > int(KDRAY_RECLIP_REFS))
         reject("the small-node re-clip size", "--reclip-refs", p.small_reclip_refs,
-               "an integer from 0 to 32");
+               integer_rule(0, int(KDRAY_RECLIP_REFS)));
     if (p.small_leaf_refs < 0 || p.small_leaf_refs > KDRAY_SMALL_ROOT_MAX_REFS)
         reject("the small-node leaf size", "--leaf-refs", p.small_leaf_refs,
-               "an integer from 0 to 64");
+               integer_rule(0, KDRAY_SMALL_ROOT_MAX_REFS));
     if (p.max_depth < 0 || p.max_depth > KDRAY_MAX_DEPTH)
-        reject("the tree depth limit", "--tree-depth", p.max_depth, "an integer from 0 to 64");
+        reject("the tree depth limit", "--tree-depth", p.max_depth,
+               integer_rule(0, KDRAY_MAX_DEPTH));
     if (p.small_stage != SmallStage::Auto && p.small_stage != SmallStage::PerRoot &&
         p.small_stage != SmallStage::PerLevel)
         reject("the small-node stage", "--small-stage", int(p.small_stage),

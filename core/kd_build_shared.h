@@ -20,6 +20,10 @@
 /* Floats per box in the builder's box arrays: lo.xyz hi.xyz (sizeof(KdBuildBox) / 4). */
 #define KDRAY_BOX_FLOATS 6
 
+/* Elements per chunk of the segmented box reduction (primitives.cl), and so references per
+ * reduction chunk of a large node, the unit the large stage's passes go by (build_large.cl). */
+#define KDRAY_REDUCE_CHUNK 256u
+
 /* KdBuildNode.axis of a small root: the small stage writes its subtree, and leaf_first is the
  * small root's index. */
 #define KDRAY_SMALL_ROOT_AXIS 4u
@@ -54,15 +58,21 @@
  * references whose lo and whose hi fall in the bin. */
 #define KDRAY_BIN_COUNTS 6u
 
+/* Split candidates per small-root reference: the planes of its box's lo and hi on each axis
+ * (candidate k of a reference: axis k / 2, its hi when k is odd), numbered reference by
+ * reference, so that candidate c is candidate c % 6 of reference c / 6 (build_small_search.cl). */
+#define KDRAY_CANDIDATES_PER_REF 6u
+
 /* Split-candidate masks per small-root reference (build_small.cl): 6 candidates below and 6
  * above, each group padded to 8 ulongs, so that a reference's masks load as two ulong8. */
 #define KDRAY_MASK_WORDS_PER_REF 16u
 #define KDRAY_MASK_BYTES_PER_REF (KDRAY_MASK_WORDS_PER_REF * 8u)
 
-/* Work-items of one work-group of the per-level small stage (build_small_level.cl): one per
- * reference a small node may hold (KDRAY_SMALL_ROOT_MAX_REFS), and the work-group size of every
- * launch (cl/runtime/launch.h's kLaunchGroup, which the host static_asserts equal). */
-#define KDRAY_SMALL_LEVEL_GROUP 64u
+/* Work-items of every work-group the builder launches (cl/runtime/launch.h rounds each launch's
+ * size up to a multiple of it): one per reference a small node may hold, since the per-level
+ * small stage (build_small_level.cl) splits one node per work-group, work-item j pricing the
+ * node's j-th reference. */
+#define KDRAY_LAUNCH_GROUP 64u
 
 /* KdBuildBox — 24 bytes. lo[3], hi[3]: the box's corners. */
 typedef struct KdBuildBox {
@@ -235,6 +245,8 @@ typedef struct KdSmallBatchArgs {
 } KdSmallBatchArgs;
 
 #ifndef KDRAY_DEVICE_CODE
+static_assert(KDRAY_LAUNCH_GROUP == KDRAY_SMALL_ROOT_MAX_REFS,
+              "kd_split_small_level prices a node's references one per work-item of its group");
 static_assert(sizeof(KdBuildBox) == KDRAY_BOX_FLOATS * sizeof(kd_f32), "KdBuildBox is 24 bytes");
 static_assert(sizeof(KdBuildNode) == 24, "KdBuildNode is 24 bytes on every device");
 static_assert(sizeof(KdSmallNode) == 16, "KdSmallNode is 16 bytes on every device");

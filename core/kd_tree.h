@@ -69,9 +69,10 @@ struct BuildParams {
 
 /// Throws Error naming the parameter (and the command-line option that sets it) when `params`
 /// is outside what the builders support: C_t finite >= 0, C_i finite > 0, empty_bonus in [0, 1),
-/// large_node_threshold in [1, 64] (the small stage's 64-bit masks), empty_space_ratio in [0, 1],
-/// large_split_bins in [0, kMaxLargeSplitBins], small_reclip_refs in [0, KDRAY_RECLIP_REFS],
-/// small_leaf_refs in [0, 64], max_depth in [0, KDRAY_MAX_DEPTH], small_stage one of its three
+/// large_node_threshold in [1, KDRAY_SMALL_ROOT_MAX_REFS] (the small stage's 64-bit masks),
+/// empty_space_ratio in [0, 1], large_split_bins in [0, kMaxLargeSplitBins], small_reclip_refs
+/// in [0, KDRAY_RECLIP_REFS], small_leaf_refs in [0, KDRAY_SMALL_ROOT_MAX_REFS], max_depth in
+/// [0, KDRAY_MAX_DEPTH], small_stage one of its three
 /// values. NaN fails every
 /// test. The one check of every builder, the command line and tree files read back.
 void validate_build_params(const BuildParams& params);

@@ -19,6 +19,7 @@ class ReferenceTreeBuilder final : public TreeBuilder {
 
     BuiltTree build(const Scene& scene) override;
     std::string description() override { return "reference (CPU, full SAH)"; }
+    std::string quality() override { return "exact (reference)"; }
     bool computes_on_host() override { return true; }
 
   private:

@@ -38,6 +38,9 @@ class TreeBuilder {
     virtual BuiltTree build(const Scene& scene) = 0;
     /// For stats.json: "reference (CPU, full SAH)" or "opencl on <device name>".
     virtual std::string description() = 0;
+    /// For the log: the quality its parameters make (build_quality_of: low, medium, high or
+    /// custom) for the OpenCL builder, "exact (reference)" for the reference builder.
+    virtual std::string quality() = 0;
     /// Whether builds run on the host's own cores (the reference builder, a CPU device), where a
     /// loader thread beside them only preempts their workers.
     virtual bool computes_on_host() = 0;

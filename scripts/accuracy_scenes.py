@@ -14,10 +14,19 @@ square image of odd width W, so that pixel x's centre ray points along ((2x + 1 
   middle column and the diagonals: those rays run along the meridians' edges.
 Each has a copy 1e5 from the origin (scaled up 100 times, so that its triangles stay far larger
 than a float's spacing there), where rounding in the ray's frame is larger.
+
+write_device_scenes adds two cases that only the scene frame (core/scene_frame.h) and the refined
+distance make right, for the device check (scripts/device-check-cases.txt):
+- sphere-inside-at-1e9: the sphere, scaled up 100 times, 1e9 from the origin, written with 17
+  digits: read in float its corners would round to a spacing of 64.
+- needles: triangles 1e4 long and 1e-3 wide nearly along x (tests/support.cpp's needle_bundle),
+  seen along their length from 1.6 away, where the watertight test's float distance is off by up
+  to 1.5e-4 relative, beyond the AOV agreement's 1e-4.
 """
 import json
 import math
 import os
+import random
 
 
 def _box(width):
@@ -71,14 +80,19 @@ def _sphere(meridians=64, parallels=48):
     return vertices, faces
 
 
-def _write(folder, case, vertices, faces, width, offset, scale):
-    obj = os.path.join(folder, case + ".obj")
+def _write_obj(obj, title, vertices, faces, digits=9):
     with open(obj, "w") as f:
-        f.write(f"# {case}: closed mesh around the camera (scripts/accuracy_scenes.py)\n")
+        f.write(f"# {title} (scripts/accuracy_scenes.py)\n")
         for v in vertices:
-            f.write("v %.9g %.9g %.9g\n" % tuple(offset + scale * c for c in v))
+            f.write("v %.*g %.*g %.*g\n" % (digits, v[0], digits, v[1], digits, v[2]))
         for a, b, c in faces:
             f.write(f"f {a + 1} {b + 1} {c + 1}\n")
+
+
+def _write(folder, case, vertices, faces, width, offset, scale, digits=9):
+    obj = os.path.join(folder, case + ".obj")
+    _write_obj(obj, f"{case}: closed mesh around the camera",
+               [tuple(offset + scale * c for c in v) for v in vertices], faces, digits)
     render = os.path.join(folder, case + ".json")
     centre = [offset] * 3
     with open(render, "w") as f:
@@ -99,4 +113,41 @@ def write_hard_scenes(folder, width):
     for name, (vertices, faces) in (("box", box), ("sphere", sphere)):
         cases.append(_write(folder, f"{name}-inside", vertices, faces, width, 0.0, 1.0))
         cases.append(_write(folder, f"{name}-inside-at-1e5", vertices, faces, width, 1e5, 100.0))
+    return cases
+
+
+def _needles(count, seed):
+    """tests/support.cpp's needle_bundle (its own random numbers): `count` triangles, a corner
+    near x = -5000 and two near x = 5000 1e-3 apart across, their middles in the unit cube, each
+    tilted a little in y."""
+    rng = random.Random(seed)
+    vertices, faces = [], []
+    for _ in range(count):
+        y, z, rise = rng.random(), rng.random(), 1e-4 * (rng.random() - 0.5)
+        vertices += [(-5000 + rng.random(), y - 5000 * rise, z),
+                     (5000 + rng.random(), y + 5000 * rise + 1e-3, z),
+                     (5000 + rng.random(), y + 5000 * rise, z + 1e-3 * (0.5 + rng.random()))]
+        faces.append((len(vertices) - 3, len(vertices) - 2, len(vertices) - 1))
+    return vertices, faces
+
+
+def write_device_scenes(folder, width):
+    """Writes the device check's far and needle cases into folder; returns (case, obj, render
+    file) for each. width: the sphere's image width and height, odd (as write_hard_scenes)."""
+    os.makedirs(folder, exist_ok=True)
+    vertices, faces = _sphere()
+    cases = [_write(folder, "sphere-inside-at-1e9", vertices, faces, width, 1e9, 100.0, 17)]
+    obj, render = os.path.join(folder, "needles.obj"), os.path.join(folder, "needles.json")
+    _write_obj(obj, "needles: 1e4 long, 1e-3 wide, seen along their length", *_needles(300, 6),
+               digits=17)
+    look_at = [0.5, 0.5, 0.5]
+    view = [1.0, -0.5, 0.5]
+    norm = math.sqrt(sum(c * c for c in view))
+    position = [a - 1.6 * c / norm for a, c in zip(look_at, view)]
+    with open(render, "w") as f:
+        json.dump({"image": {"width": 160, "height": 120, "spp": 1},
+                   "camera": {"position": position, "look_at": look_at, "up": [0, 1, 0],
+                              "fov_y": 50},
+                   "lights": [], "background": [0, 0, 0], "max_depth": 1}, f)
+    cases.append(("needles", obj, render))
     return cases

@@ -72,7 +72,9 @@ strip_stats() {
     python3 - "$1" "$2" <<'EOF'
 import json, sys
 VOLATILE_SUFFIXES = ("_ms", "_per_s", "_per_second", "timings_ms")
-VOLATILE = {"device_bytes", "device_bytes_per_triangle", "kdray_version"}
+# frames_per_second_after_first is a rate too, which the suffixes miss.
+VOLATILE = {"device_bytes", "device_bytes_per_triangle", "kdray_version",
+            "frames_per_second_after_first"}
 side_dir = sys.argv[2]
 def strip(x):
     if isinstance(x, dict):

@@ -7,7 +7,8 @@
 #                           only the ICD loader: the driver is the machine's
 #   OUTDIR/device-check.sh  the device check (scripts/device-check.sh)
 #   OUTDIR/scenes/          BART Kitchen and Robots frame 0, dragon res2, the Cornell boxes, the
-#                           glass room (testdata/cornell), the hard scenes (scripts/accuracy_scenes.py)
+#                           glass room (testdata/cornell), the hard scenes, a sphere 1e9 from the
+#                           origin and needles (scripts/accuracy_scenes.py)
 #   OUTDIR/refs/            their hit AOVs and images rendered here by the CPU reference builder
 #                           and tracer, which device-check.sh holds the device's output against
 # The whole folder stays under 60 MiB (the device machine carries 64 MiB): OpenImageIO's closure
@@ -30,7 +31,7 @@ while [ $# -gt 0 ]; do
     case "$1" in
     --no-scenes) scenes=0 ;;
     --build-dir) build_dir=$2; shift ;;
-    -h | --help) sed -n '2,20p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,23p' "$0"; exit 0 ;;
     -*) echo "device-bundle: unknown option $1" >&2; exit 2 ;;
     *) [ -z "$out" ] || { echo "device-bundle: one OUTDIR only" >&2; exit 2; }; out=$1 ;;
     esac
@@ -103,12 +104,15 @@ if [ "$scenes" = 1 ]; then
         "$shared_scenes/cornell-box/render.json" "$s/cornell-box/"
     cp "$root/testdata/cornell/"{room.obj,room.mtl,render.json} "$s/glass-room/"
     # The hard scenes: closed meshes around the camera, centre rays through vertices and along
-    # edges, at 1e5 from the origin (README, robustness): every ray must hit.
+    # edges, at 1e5 from the origin (README, robustness): every ray must hit. Beside them the
+    # sphere 1e9 from the origin (the scene frame) and needles seen along their length (the
+    # refined distance).
     python3 - "$root/scripts" "$s/hard" <<'PY'
 import sys
 sys.path.insert(0, sys.argv[1])
-from accuracy_scenes import write_hard_scenes
+from accuracy_scenes import write_device_scenes, write_hard_scenes
 write_hard_scenes(sys.argv[2], 33)
+write_device_scenes(sys.argv[2], 33)
 PY
     cp "$root/scripts/device-check-cases.txt" "$out/cases.txt"
     # Each case: name, OBJ and render file (relative to the bundle), size, spp, what to compare.

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "core/kd_shared.h"
 #include "core/kd_tree.h"
 #include "core/math.h"
+#include "core/render_file.h"
 #include "core/scene.h"
 
 namespace kdray::test {
@@ -26,6 +28,15 @@ Scene random_triangles(int count, std::uint32_t seed, float extent = 1.0f, float
 Scene long_slivers(int count, std::uint32_t seed);
 /// Triangles 1e4 long and 1e-3 wide through a 10-unit box.
 Scene needles(int count, std::uint32_t seed);
+/// Needles 1e4 long and 1e-3 wide, all nearly along the x axis, their middles spread over the
+/// unit cube, as test_intersect.cpp's needle test makes them one at a time. Seen by
+/// needle_bundle_camera, every hit is one whose watertight float t was off by up to 1.5e-4
+/// relative (the far corners, 5000 away along the ray's dominant axis, swamp the sum), so the
+/// tracers must take the refined distance (kd_plane_distance) there.
+Scene needle_bundle(int count, std::uint32_t seed);
+/// A camera 1.6 from the bundle's middle, looking mostly along the needles (direction
+/// (1, -0.5, 0.5)), from outside their cross-section: each needle crosses the whole image.
+Camera needle_bundle_camera();
 /// All triangles in the plane z = 0: the root is flat, every node below it too.
 Scene planar_triangles(int count, std::uint32_t seed);
 /// n^3 axis-aligned unit cubes on a lattice of spacing 2: triangles lie exactly on the candidate
@@ -38,16 +49,25 @@ Scene coincident_triangles(int count);
 /// referenced by the tree but must never be hit.
 Scene with_zero_area(int count, std::uint32_t seed);
 
-/// OBJ text of three UV spheres (radii 1, 0.8, 0.6; 24 x 48 quads each, flat shaded) near the
-/// origin, every coordinate multiplied by `scale` and moved by `offset` on each axis, in double
-/// (17 digits): a scene that floats read on load would ruin far from the origin (spacing 1.0 at
-/// 1e7) or at extreme scales (products of three coordinates overflow at 1e15).
-std::string spheres_obj(double scale, double offset);
+/// OBJ text of three UV spheres (radii 1, 0.8, 0.6; `rings` x 2 `rings` quads each, flat shaded)
+/// near the origin, every coordinate multiplied by `scale` and moved by `offset` on each axis, in
+/// double (17 digits): a scene that floats read on load would ruin far from the origin (spacing
+/// 1.0 at 1e7) or at extreme scales (products of three coordinates overflow at 1e15).
+std::string spheres_obj(double scale, double offset, int rings = 24);
 
-/// The hard scenes above by name, with the far (offset 1e5) and tiny (extent 1e-4) random scenes.
+/// spheres_obj's scene loaded from a file by load_obj, so through the scene frame
+/// (core/scene_frame.h): its triangles lie near the origin at about unit extent.
+Scene load_spheres(double scale, double offset, int rings);
+
+/// The hard scenes above by name, with the far (offset 1e5) and tiny (extent 1e-4) random scenes,
+/// a needle bundle, and spheres at scales 1e-30 and 1e30 and offsets 1e7 and 1e9 loaded through
+/// the scene frame. `camera`, where set, is a view of the scene's hard part for the tests that
+/// render it (the needle bundle's, where a view of the whole scene would see no needle); else
+/// they frame the whole scene.
 struct NamedScene {
     std::string name;
     Scene scene;
+    std::optional<Camera> camera;
 };
 std::vector<NamedScene> hard_scenes();
 

@@ -124,6 +124,37 @@ TEST_CASE("SceneFrame::fit: a power-of-two scale to an extent in [0.5, 1), whole
                          Error);
 }
 
+TEST_CASE("a scene too small for the frame's scale is one error naming the file and the extent") {
+    // SceneFrame::fit's other error (an extent that overflows a double) is tested above and
+    // cannot come from an OBJ: the loader refuses coordinates beyond float range first. This one
+    // can: the scale 2^-e of an extent below 2^-1000 would leave double range (a subnormal
+    // extent, 1e-310, gives 2^1030 = inf and NaN corners), so fit refuses every extent there.
+    // 1e-300 still fits: scaled by 2^996, its extent lies in [0.5, 1).
+    const SceneFrame fine = SceneFrame::fit({0, 0, 0}, {1e-300, 0, 0}, "fine.obj");
+    CHECK(1e-300 * fine.scale >= 0.5);
+    CHECK(1e-300 * fine.scale < 1.0);
+    CHECK_THROWS_WITH_AS(SceneFrame::fit({0, 0, 0}, {0, 1e-305, 0}, "speck.obj"),
+                         doctest::Contains("speck.obj: the scene's extent (1e-305) is too small "
+                                           "for kdray to scale to float precision"),
+                         Error);
+
+    // Through load_obj, as kdray render and build meet it: the OBJ names the file.
+    const fs::path dir = test::fresh_temp_dir("kdray_scene_frame_small");
+    const Scene loaded = load_obj(
+        test::write_text_file(dir / "small.obj", "v 0 0 0\nv 1e-300 0 0\nv 0 1e-300 0\nf 1 2 3\n"));
+    CHECK(loaded.frame.scale == fine.scale);
+    CHECK(loaded.vertex(0, 1).x == float(1e-300 * fine.scale));
+    for (const std::string extent : {"1e-305", "1e-310"}) {
+        CAPTURE(extent);
+        const fs::path obj = test::write_text_file(
+            dir / "speck.obj", "v 0 0 0\nv " + extent + " 0 0\nv 0 " + extent + " 0\nf 1 2 3\n");
+        const std::string message =
+            obj.string() + ": the scene's extent (" + extent + ") is too small for kdray to scale";
+        CHECK_THROWS_WITH_AS(load_obj(obj), doctest::Contains(message.c_str()), Error);
+    }
+    fs::remove_all(dir);
+}
+
 TEST_CASE("a scene near the origin is only scaled by a power of two: the same hits, bit for bit") {
     // Power-of-two scaling commutes with every float operation of the build and the trace, so
     // these scenes must give exactly the distances of the unit scene times the scale.

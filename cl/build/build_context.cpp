@@ -12,9 +12,9 @@ namespace kdray::build_detail {
 BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins) {
     return cached_kernels<BuilderKernels>(device, std::to_string(large_split_bins), [&] {
         // -D only for compile-time choices; the layouts and constants are core/kd_build_shared.h's.
-        const cl::Program large = cached_program(
-            device, "build_large.cl",
-            primitives_defines() + " -DKDRAY_LARGE_BINS=" + std::to_string(large_split_bins) + "u");
+        const cl::Program large =
+            cached_program(device, "build_large.cl",
+                           "-DKDRAY_LARGE_BINS=" + std::to_string(large_split_bins) + "u");
         // CPU compilers may have no vector popcount (build_small_search.cl, kd_popcount8).
         const cl::Program small =
             cached_program(device, "build_small.cl",

@@ -146,7 +146,8 @@ LargeLevel LargeLevel::allocate(BuildContext& ctx, cl_uint nodes, cl_uint refs, 
 LargeLevel LargeLevel::root(BuildContext& ctx, TriangleBounds& triangles, const Aabb& bounds) {
     LargeLevel level;
     const cl_uint n = triangles.count;
-    level.nodes = 1, level.refs = n, level.chunks = cl_uint((n + kReduceChunk - 1) / kReduceChunk);
+    level.nodes = 1, level.refs = n;
+    level.chunks = cl_uint((std::size_t(n) + KDRAY_REDUCE_CHUNK - 1) / KDRAY_REDUCE_CHUNK);
     level.node = ctx.allocate<KdLargeNode>(1, "large nodes");
     level.ref_start = ctx.allocate<cl_uint>(1, "large node reference starts");
     level.ref_count = ctx.allocate<cl_uint>(1, "large node reference counts");

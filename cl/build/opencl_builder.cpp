@@ -49,7 +49,6 @@ BuildParams supported_params(const BuildParams& params) {
     // Parameters out of range are an error, not silently clamped (validate_build_params names
     // the one that is off); the small stage's masks bound the large-node threshold.
     validate_build_params(params);
-    static_assert(KDRAY_SMALL_ROOT_MAX_REFS == 64, "validate_build_params bounds T by 64");
     return params;
 }
 

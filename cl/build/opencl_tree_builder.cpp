@@ -2,6 +2,8 @@
 
 #include <memory>
 
+#include "core/build_quality.h"
+
 namespace kdray {
 
 void OpenClTreeBuilder::prepare() {
@@ -19,6 +21,10 @@ BuiltTree OpenClTreeBuilder::build(const Scene& scene) {
 
 std::string OpenClTreeBuilder::description() {
     return "opencl on " + session_.device().info().name;
+}
+
+std::string OpenClTreeBuilder::quality() {
+    return build_quality_of(params_);
 }
 
 bool OpenClTreeBuilder::computes_on_host() {

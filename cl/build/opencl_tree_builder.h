@@ -25,6 +25,7 @@ class OpenClTreeBuilder final : public TreeBuilder {
     void prepare() override;
     BuiltTree build(const Scene& scene) override;
     std::string description() override;
+    std::string quality() override;
     bool computes_on_host() override;
 
   private:

@@ -11,9 +11,6 @@
 
 namespace kdray::build_detail {
 
-static_assert(kLaunchGroup == KDRAY_SMALL_LEVEL_GROUP,
-              "kd_split_small_level runs one node per work-group of every launch's size");
-
 /* The paper's shape: a launch per level, a work-group per node, the host reading back the next
  * level's size (one read per level, as the large stage does). The nodes of every level stay in
  * one array, so that the subtrees' preorder can be laid out afterwards: sizes bottom up and
@@ -51,10 +48,10 @@ void build_batch_levels(BuildContext& ctx, const SmallRoots& small, const Triang
         ctx.reserve<KdSmallLevelNode>(nodes, room, end, "small level nodes");
         with_cl_context("setting the small level node count",
                         [&] { q.enqueueFillBuffer(next_free.buffer(), end, 0, sizeof(cl_uint)); });
-        enqueue_kernel(q, k.split_small_level, std::size_t(count) * KDRAY_SMALL_LEVEL_GROUP, args,
-                       begin, count, small.roots.buffer(), small.ref_box.buffer(),
-                       out.side_masks.buffer(), small.ref_tri.buffer(),
-                       triangles.triangles.buffer(), nodes.buffer(), next_free.buffer());
+        enqueue_kernel(q, k.split_small_level, std::size_t(count) * KDRAY_LAUNCH_GROUP, args, begin,
+                       count, small.roots.buffer(), small.ref_box.buffer(), out.side_masks.buffer(),
+                       small.ref_tri.buffer(), triangles.triangles.buffer(), nodes.buffer(),
+                       next_free.buffer());
         begin = end;
         count = ctx.read_uint(next_free, 0) - end;
     }

@@ -146,7 +146,7 @@ SmallSubtrees run_small_stage(BuildContext& ctx, const SmallRoots& small,
     out.node_count = ctx.allocate<cl_uint>(roots, "subtree node counts");
     out.leaf_refs = ctx.allocate<cl_uint>(roots, "subtree leaf references");
     if (small.count == 0) return out;
-    checked_u32(6 * std::size_t(small.refs), "split candidates");
+    checked_u32(KDRAY_CANDIDATES_PER_REF * std::size_t(small.refs), "split candidates");
     out.batches = small_batches(ctx, small, first_scale, batch_bytes);
 
     // The per-root kernel's totals (read once per batch).

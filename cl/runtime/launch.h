@@ -1,6 +1,7 @@
 // launch.h — one-dimensional kernel launches with kdray's error context. Every kernel of the
 // builder takes its element count as an argument and returns early past it, so the global size is
-// rounded up to a multiple of kLaunchGroup and every launch uses that one work-group size.
+// rounded up to a multiple of KDRAY_LAUNCH_GROUP (core/kd_build_shared.h, where the per-level
+// small stage's kernel reads it too) and every launch uses that one work-group size.
 //
 // Why a fixed work-group size: PoCL compiles a separate work-group function for every local size
 // it meets, and left to itself it picks the local size from the global size, which changes at
@@ -15,11 +16,9 @@
 #include <CL/opencl.hpp>
 
 #include "cl/runtime/cl_error.h"
+#include "core/kd_build_shared.h"
 
 namespace kdray {
-
-/// The work-group size of every launch (see above).
-inline constexpr std::size_t kLaunchGroup = 64;
 
 /// Sets the kernel's arguments in order.
 template <class... Args>
@@ -36,9 +35,9 @@ void enqueue_kernel(cl::CommandQueue& queue, cl::Kernel& kernel, std::size_t cou
     if (count == 0) return;
     try {
         set_kernel_args(kernel, args...);
-        const std::size_t global = (count + kLaunchGroup - 1) / kLaunchGroup * kLaunchGroup;
-        queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(global),
-                                   cl::NDRange(kLaunchGroup));
+        const std::size_t group = KDRAY_LAUNCH_GROUP;
+        const std::size_t global = (count + group - 1) / group * group;
+        queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(global), cl::NDRange(group));
     } catch (const cl::Error& e) {
         throw_cl_error("running kernel " + kernel.getInfo<CL_KERNEL_FUNCTION_NAME>() + " over " +
                            std::to_string(count) + " items",

@@ -8,10 +8,6 @@
 
 namespace kdray {
 
-std::string primitives_defines() {
-    return "-DKDRAY_REDUCE_CHUNK=" + std::to_string(kReduceChunk) + "u";
-}
-
 struct ClPrimitives::Kernels {
     cl::Kernel scan_chunks, scan_single, add_chunk_offsets, add_offsets_by_chunk, compact_by_flags;
     cl::Kernel reduce_box_chunks, reduce_box_segments, count_box_chunks;
@@ -19,7 +15,7 @@ struct ClPrimitives::Kernels {
 
 ClPrimitives::ClPrimitives(ClDevice& device)
     : device_(device), kernels_(cached_kernels<Kernels>(device, "", [&] {
-          const cl::Program program = cached_program(device, "primitives.cl", primitives_defines());
+          const cl::Program program = cached_program(device, "primitives.cl");
           Kernels k;
           k.scan_chunks = make_kernel(program, "kd_scan_chunks");
           k.scan_single = make_kernel(program, "kd_scan_single");

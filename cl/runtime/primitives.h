@@ -5,19 +5,12 @@
 #pragma once
 
 #include <cstddef>
-#include <string>
 
 #include <CL/opencl.hpp>
 
 #include "cl/runtime/device.h"
 
 namespace kdray {
-
-/// Elements per chunk of the segmented box reduction (primitives.cl's KDRAY_REDUCE_CHUNK).
-inline constexpr std::size_t kReduceChunk = 256;
-
-/// The -D options every program that uses the reduction's chunk size is built with.
-std::string primitives_defines();
 
 /// Cheap to construct: the program and its kernels are made once per device and kept.
 class ClPrimitives {

@@ -193,7 +193,8 @@ __kernel void kd_build_small_subtrees(
             continue;
         }
         /* Inner node: go on with the below child, keep the above child for later. */
-        const uint ref = best / 6, k = best % 6, axis = k / 2;
+        const uint ref = best / KDRAY_CANDIDATES_PER_REF, k = best % KDRAY_CANDIDATES_PER_REF,
+                   axis = k / 2;
         float8 pos;
         ulong8 below, above;
         const KdClippedTable* node_table = 0;

@@ -1,6 +1,6 @@
 /* build_small_level.cl — the small-node stage in the paper's shape (Zhou et al. 2008, §4.2): the
- * small nodes of one level at a time across the device, one work-group of KDRAY_SMALL_LEVEL_GROUP
- * work-items per node. Work-item j prices the six candidates of the node's j-th reference (the
+ * small nodes of one level at a time across the device, one work-group of KDRAY_LAUNCH_GROUP
+ * work-items (every launch's group size) per node. Work-item j prices the six candidates of the node's j-th reference (the
  * popcounts of its masks and the candidates' side masks, build_small_search.cl) and the group
  * reduces the costs in local memory to the cheapest candidate, so no work-item holds a table of
  * its own. build_small.cl's per-root kernel builds each root's subtree in one work-item instead,
@@ -122,15 +122,15 @@ inline ulong kd_group_root_mask(__local const KdClippedTable* t, ulong mask) {
  * kd_build_small_subtrees. A split node's two children are appended to the next level at
  * *next_free (the host made room for two per node). The group's work-items share the node's
  * table when it re-clips and reduce the candidates' costs in local memory. */
-__kernel __attribute__((reqd_work_group_size(KDRAY_SMALL_LEVEL_GROUP, 1, 1))) void
+__kernel __attribute__((reqd_work_group_size(KDRAY_LAUNCH_GROUP, 1, 1))) void
 kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
                      __global const KdSmallRoot* small_roots, __global const float* ref_box,
                      __global const ulong* side_masks, __global const uint* ref_tri,
                      __global const float* triangles, __global KdSmallLevelNode* nodes,
                      __global uint* next_free) {
     __local KdClippedTable table;
-    __local float group_cost[KDRAY_SMALL_LEVEL_GROUP];
-    __local uint group_candidate[KDRAY_SMALL_LEVEL_GROUP];
+    __local float group_cost[KDRAY_LAUNCH_GROUP];
+    __local uint group_candidate[KDRAY_LAUNCH_GROUP];
     __local uint scratch[7]; /* [0] a reference reaches past the box; [1, 2] kept; [3, 6] dropped */
     const uint g = get_group_id(0), lid = get_local_id(0);
     /* Every work-item of a group takes the same branches up to the end: the barriers need it. */
@@ -186,19 +186,19 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
                     &s, vload8(lid, table.candidates),
                     convert_ulong8(vload8(0, table.masks + lid * KDRAY_MASK_WORDS_PER_REF)),
                     convert_ulong8(vload8(1, table.masks + lid * KDRAY_MASK_WORDS_PER_REF)),
-                    lid * 6);
+                    lid * KDRAY_CANDIDATES_PER_REF);
             else
                 kd_price_candidates(
                     &s, kd_candidate_lanes(ref_box + (size_t)(start + lid) * KDRAY_BOX_FLOATS),
                     vload8(0, root_masks + (size_t)lid * KDRAY_MASK_WORDS_PER_REF),
                     vload8(1, root_masks + (size_t)lid * KDRAY_MASK_WORDS_PER_REF),
-                    (start + lid) * 6);
+                    (start + lid) * KDRAY_CANDIDATES_PER_REF);
         }
         group_candidate[lid] = kd_cheapest_candidate(&s);
         group_cost[lid] = kd_cheapest_cost(&s);
         barrier(CLK_LOCAL_MEM_FENCE);
         /* The least cost, then the least candidate index: the per-root search's pick. */
-        for (uint stride = KDRAY_SMALL_LEVEL_GROUP / 2; stride > 0; stride >>= 1) {
+        for (uint stride = KDRAY_LAUNCH_GROUP / 2; stride > 0; stride >>= 1) {
             if (lid < stride) {
                 const float c = group_cost[lid + stride];
                 const uint k = group_candidate[lid + stride];
@@ -227,7 +227,8 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
     }
 
     /* Inner node: the children of the best candidate, as kd_build_small_subtrees makes them. */
-    const uint ref = best / 6, k = best % 6, axis = k / 2;
+    const uint ref = best / KDRAY_CANDIDATES_PER_REF, k = best % KDRAY_CANDIDATES_PER_REF,
+               axis = k / 2;
     float8 pos;
     ulong8 below, above;
     if (on_table) {

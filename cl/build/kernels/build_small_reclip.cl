@@ -103,7 +103,7 @@ inline uint kd_best_clipped_split(KdBox box, ulong mask, const KdClippedTable* t
         kd_price_candidates(&s, vload8(l, t->candidates),
                             convert_ulong8(vload8(0, t->masks + l * KDRAY_MASK_WORDS_PER_REF)),
                             convert_ulong8(vload8(1, t->masks + l * KDRAY_MASK_WORDS_PER_REF)),
-                            l * 6);
+                            l * KDRAY_CANDIDATES_PER_REF);
     }
     return kd_cheapest_candidate(&s);
 }

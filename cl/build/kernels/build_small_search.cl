@@ -193,7 +193,8 @@ inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global cons
         const uint j = kd_lowest_bit(rest), ref = start + j;
         kd_price_candidates(&s, kd_candidate_lanes(ref_box + (size_t)ref * KDRAY_BOX_FLOATS),
                             vload8(0, root_masks + (size_t)j * KDRAY_MASK_WORDS_PER_REF),
-                            vload8(1, root_masks + (size_t)j * KDRAY_MASK_WORDS_PER_REF), ref * 6);
+                            vload8(1, root_masks + (size_t)j * KDRAY_MASK_WORDS_PER_REF),
+                            ref * KDRAY_CANDIDATES_PER_REF);
     }
     return kd_cheapest_candidate(&s);
 }

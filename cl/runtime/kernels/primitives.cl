@@ -8,8 +8,9 @@
  * miscompiling barriers inside loops; on a 2-core CPU it is also what runs fastest, since a
  * work-group's items run one after another anyway.
  *
- * Boxes are 6 floats: lo.xyz, hi.xyz. An empty box is lo = +inf, hi = -inf. */
+ * Boxes are KDRAY_BOX_FLOATS (6) floats: lo.xyz, hi.xyz. An empty box is lo = +inf, hi = -inf. */
 #include "core/kd_shared.h"
+#include "core/kd_build_shared.h"
 
 /* Scan, step 1: work-item i scans elements [i*chunk, min(n, (i+1)*chunk)) sequentially into out
  * (exclusive, starting from 0) and writes the chunk's total to sums[i]. out may alias in. */
@@ -68,12 +69,12 @@ __kernel void kd_compact_by_flags(__global const uint* values, __global const ui
     if (k < n && flags[k]) out[positions[k]] = values[k];
 }
 
-/* out = the union of boxes[first .. end) (6 floats each: lo.xyz hi.xyz); an empty range gives
+/* out = the union of boxes[first .. end) (lo.xyz hi.xyz each); an empty range gives
  * lo = +inf, hi = -inf. Both steps of the segmented reduction below are this loop. */
 inline void kd_union_boxes(__global const float* boxes, uint first, uint end, __global float* out) {
     float3 bmin = (float3)(INFINITY), bmax = (float3)(-INFINITY);
     for (uint k = first; k < end; ++k) {
-        __global const float* b = boxes + (size_t)k * 6;
+        __global const float* b = boxes + (size_t)k * KDRAY_BOX_FLOATS;
         bmin = fmin(bmin, (float3)(b[0], b[1], b[2]));
         bmax = fmax(bmax, (float3)(b[3], b[4], b[5]));
     }
@@ -81,14 +82,10 @@ inline void kd_union_boxes(__global const float* boxes, uint first, uint end, __
     out[3] = bmax.x, out[4] = bmax.y, out[5] = bmax.z;
 }
 
-/* Segmented reduction, chunks of at most KDRAY_REDUCE_CHUNK elements: segment s covers
- * boxes [seg_start[s], seg_start[s] + seg_count[s]) and owns chunks [chunk_start[s],
- * chunk_start[s + 1]), ceil(count / chunk) of them. Work-item c finds its segment by binary
- * search and writes the union of its chunk's boxes to chunk_boxes[c]. */
-#ifndef KDRAY_REDUCE_CHUNK
-#error "the host passes -DKDRAY_REDUCE_CHUNK (cl/primitives.h, kReduceChunk)"
-#endif
-
+/* Segmented reduction, chunks of at most KDRAY_REDUCE_CHUNK (core/kd_build_shared.h) elements:
+ * segment s covers boxes [seg_start[s], seg_start[s] + seg_count[s]) and owns chunks
+ * [chunk_start[s], chunk_start[s + 1]), ceil(count / chunk) of them. Work-item c finds its
+ * segment by binary search and writes the union of its chunk's boxes to chunk_boxes[c]. */
 __kernel void kd_reduce_box_chunks(__global const float* boxes, __global const uint* seg_start,
                                    __global const uint* seg_count,
                                    __global const uint* chunk_start, uint segments,
@@ -106,7 +103,7 @@ __kernel void kd_reduce_box_chunks(__global const float* boxes, __global const u
     const uint local_chunk = c - chunk_start[s];
     const uint begin = seg_start[s] + local_chunk * KDRAY_REDUCE_CHUNK;
     const uint end = min(seg_start[s] + seg_count[s], begin + KDRAY_REDUCE_CHUNK);
-    kd_union_boxes(boxes, begin, end, chunk_boxes + (size_t)c * 6);
+    kd_union_boxes(boxes, begin, end, chunk_boxes + (size_t)c * KDRAY_BOX_FLOATS);
 }
 
 /* Segmented reduction, step 2: segment s's box is the union of its chunks' boxes. */
@@ -115,7 +112,8 @@ __kernel void kd_reduce_box_segments(__global const float* chunk_boxes,
                                      __global float* seg_boxes) {
     const uint s = get_global_id(0);
     if (s >= segments) return;
-    kd_union_boxes(chunk_boxes, chunk_start[s], chunk_start[s + 1], seg_boxes + (size_t)s * 6);
+    kd_union_boxes(chunk_boxes, chunk_start[s], chunk_start[s + 1],
+                   seg_boxes + (size_t)s * KDRAY_BOX_FLOATS);
 }
 
 /* Chunks per segment, for the scan that gives chunk_start: ceil(count / KDRAY_REDUCE_CHUNK). */
