@@ -149,6 +149,46 @@ TEST_CASE("a corrupt tree file is refused with its name; every corruption is cau
     fs::remove_all(dir);
 }
 
+TEST_CASE("a frame whose AOV cannot be written leaves neither its image nor a record") {
+    // A directory where the AOV goes makes its write fail, as a full disk would, without root.
+    // The frame's image must not stay without it, nor replace an earlier run's.
+    const fs::path dir = fresh_temp_dir("hostile-aov");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path a = write_text_file(dir / "in" / "a.obj", kTriangleObj);
+    const fs::path b = write_text_file(dir / "in" / "b.obj", kTriangleObj);
+    fs::create_directories(dir / "one" / "a.aov.exr");
+    check_error(render(a, dir / "one", camera, {"--aov"}), 1, {"a.aov.exr", "directory"});
+    CHECK_FALSE(fs::exists(dir / "one" / "a.png"));
+    CHECK_FALSE(fs::exists(dir / "one" / "stats.json"));
+    // Rendered again, now with its AOV, the frame fails with the earlier run's image as it was
+    // (it was written, then removed with the failed AOV) and that run's record kept.
+    REQUIRE(render(a, dir / "again", camera).status == 0);
+    const std::string earlier = read_file(dir / "again" / "a.png");
+    REQUIRE(!earlier.empty());
+    fs::create_directories(dir / "again" / "a.aov.exr");
+    check_error(render(a, dir / "again", camera, {"--aov"}), 1, {"a.aov.exr", "directory"});
+    CHECK(read_file(dir / "again" / "a.png") == earlier);
+    CHECK(read_json(dir / "again" / "stats.json")["frames"].size() == 1);
+    // A later frame: the run stops at it; the frame before keeps its files and its record.
+    fs::create_directories(dir / "two" / "b.aov.exr");
+    const CommandResult r = run_kdray(
+        {"render", a.string(), b.string(), "-o", (dir / "two").string(), "--camera",
+         camera.string(), "--aov", "--builder", "reference", "--tracer", "reference", "-q"},
+        kNoHang);
+    INFO(r.err);
+    CHECK(r.status == 1);
+    CHECK(r.err.find("b.aov.exr") != std::string::npos);
+    CHECK(fs::exists(dir / "two" / "a.png"));
+    CHECK(fs::exists(dir / "two" / "a.aov.exr"));
+    CHECK_FALSE(fs::exists(dir / "two" / "b.png"));
+    const nlohmann::json stats = read_json(dir / "two" / "stats.json");
+    REQUIRE(stats["frames"].size() == 1);
+    CHECK(stats["frames"][0]["image"] == "a.png");
+    REQUIRE(stats["failed_frames"].size() == 1);
+    CHECK(stats["failed_frames"][0]["image"] == "b.png");
+    fs::remove_all(dir);
+}
+
 TEST_CASE("MTL files: values kdray cannot shade are errors with the MTL file and line") {
     const fs::path dir = fresh_temp_dir("hostile-mtl");
     const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
@@ -248,6 +288,19 @@ TEST_CASE("a full disk: the run fails naming the file, and no image is left unde
     // Nothing of the frame under a final name, and no temporary left.
     for (const auto& entry : fs::directory_iterator(mount / "out"))
         CHECK_MESSAGE(false, "left behind: " << entry.path().filename().string());
+
+    // A frame rendered again onto a full disk fails with the earlier run's image as it was.
+    fs::remove(mount / "filler");
+    const fs::path again = mount / "again";
+    REQUIRE(render(tri, again, write_text_file(dir / "small.json", kSmallRender)).status == 0);
+    const std::string earlier = read_file(again / "room.png");
+    REQUIRE(!earlier.empty());
+    write_text_file(mount / "filler", std::string(200 * 1024, 'x'));  // what fits: the disk full
+    const CommandResult full = render(tri, again, camera, {"--aov"});
+    CHECK(full.status == 1);
+    CHECK(read_file(again / "room.png") == earlier);
+    CHECK_FALSE(fs::exists(again / "room.aov.exr"));
+    CHECK(read_json(again / "stats.json")["frames"].size() == 1);
     CHECK(std::system(("umount '" + mount.string() + "'").c_str()) == 0);
     fs::remove_all(dir);
 }
