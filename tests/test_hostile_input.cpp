@@ -9,6 +9,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -16,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "core/kd_shared.h"
+#include "core/tree_file.h"
 #include "tests/support.h"
 
 namespace fs = std::filesystem;
@@ -149,6 +153,102 @@ TEST_CASE("a corrupt tree file is refused with its name; every corruption is cau
     fs::remove_all(dir);
 }
 
+TEST_CASE(
+    "a tree file with a sound checksum but an invalid tree is refused, named, with the fault") {
+    // The checksum catches damage; a file written with a broken tree and a checksum to match
+    // (another program, a bug in a builder) must still fail on what it holds. Each case patches
+    // one value of a valid file and recomputes the checksum as tree_file.cpp does.
+    const fs::path dir = fresh_temp_dir("hostile-tree-content");
+    const fs::path obj = write_obj(dir / "scene.obj", random_triangles(200, 3));
+    const fs::path tree_path = dir / "t.kdt";
+    const CommandResult built =
+        run_kdray({"build", obj.string(), "--builder", "reference", "-o", tree_path.string()});
+    REQUIRE_MESSAGE(built.status == 0, built.err);
+    const std::string good = read_file(tree_path);
+    const kdray::KdTree tree = kdray::read_tree_file(tree_path).tree;
+    REQUIRE(tree.nodes.size() > 1);
+    REQUIRE(!kd_node_is_leaf(tree.nodes[0]));
+    // The file ends with the nodes (a count, 8 bytes each), the leaf indices (a count, 4 bytes
+    // each) and the 8-byte checksum; it starts with the magic, the version, the scene's path,
+    // its triangle count and hash, the builder's name, then the parameters, C_t first.
+    const std::size_t checksum_at = good.size() - 8;
+    const std::size_t indices_at = checksum_at - 4 * tree.leaf_indices.size();
+    const std::size_t nodes_at = indices_at - 8 - 8 * tree.nodes.size();
+    auto u32_at = [&](std::size_t at) {
+        std::uint32_t v = 0;
+        std::memcpy(&v, good.data() + at, 4);
+        return v;
+    };
+    const std::size_t builder_at = 12 + 4 + u32_at(12) + 8 + 8;
+    const std::size_t traversal_cost_at = builder_at + 4 + u32_at(builder_at);
+    std::size_t filled_leaf = 0;
+    while (!kd_node_is_leaf(tree.nodes[filled_leaf]) || kd_leaf_count(tree.nodes[filled_leaf]) == 0)
+        ++filled_leaf;
+    struct Patch {
+        const char* what;
+        std::size_t at;
+        std::uint32_t value;
+        std::string problem;
+    };
+    float negative_cost = -15.0f;
+    std::uint32_t negative_cost_bits = 0;
+    std::memcpy(&negative_cost_bits, &negative_cost, 4);
+    const std::size_t nodes = tree.nodes.size();
+    const std::vector<Patch> patches = {
+        {"a leaf index of 4294967295", indices_at, 0xFFFFFFFFu,
+         "lists triangle 4294967295 of a scene of 200"},
+        {"the root's above child past the last node", nodes_at + 4,
+         std::uint32_t(nodes << 2) | kd_node_axis(tree.nodes[0]),
+         "node 0 has above child " + std::to_string(nodes)},
+        {"a leaf whose run ends past the leaf indices", nodes_at + 8 * filled_leaf,
+         std::uint32_t(tree.leaf_indices.size() + 1),
+         "leaf " + std::to_string(filled_leaf) + " names entries"},
+        {"a negative C_t (every SAH cost negative)", traversal_cost_at, negative_cost_bits, "C_t"}};
+    for (const Patch& patch : patches) {
+        INFO(std::string(patch.what));
+        std::string bad = good;
+        std::memcpy(bad.data() + patch.at, &patch.value, 4);
+        const std::uint64_t checksum =
+            kdray::tree_file_checksum(std::string_view(bad.data(), checksum_at));
+        std::memcpy(bad.data() + checksum_at, &checksum, 8);
+        const fs::path file = write_text_file(dir / "patched.kdt", bad);
+        check_error(run_kdray({"stats", file.string(), "--builder", "reference"}, kNoHang), 1,
+                    {"patched.kdt", patch.problem});
+    }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("inputs past their size limit are refused from their size, before any byte is read") {
+    // Sparse files: the sizes cost no disk. A render file is read up to 64 MiB, an MTL file up to
+    // 256 MiB (input_file.h's callers); an OBJ up to a quarter of the machine's memory, so one
+    // of 1 TiB is past it anywhere, and reading it would fail on memory, not on its size.
+    const fs::path dir = fresh_temp_dir("hostile-size");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path tri = write_text_file(dir / "tri.obj", kTriangleObj);
+    auto sparse = [&](const fs::path& path, std::uintmax_t bytes) {
+        std::ofstream(path).close();
+        fs::resize_file(path, bytes);
+        REQUIRE(fs::file_size(path) == bytes);
+        return path;
+    };
+    const std::uintmax_t render_limit = std::uintmax_t(64) << 20;
+    const std::uintmax_t mtl_limit = std::uintmax_t(256) << 20;
+    check_error(render(tri, dir / "out", sparse(dir / "huge.json", render_limit + 1)), 1,
+                {"huge.json: " + std::to_string(render_limit + 1) + " bytes, more than the " +
+                 std::to_string(render_limit) + " bytes kdray reads of one render file"});
+    sparse(dir / "huge.mtl", mtl_limit + 1);
+    const fs::path obj =
+        write_text_file(dir / "m.obj", std::string("mtllib huge.mtl\n") + kTriangleObj);
+    check_error(render(obj, dir / "out", camera), 1,
+                {"huge.mtl: " + std::to_string(mtl_limit + 1) + " bytes, more than the " +
+                 std::to_string(mtl_limit) + " bytes kdray reads of one MTL file"});
+    const std::uintmax_t tebibyte = std::uintmax_t(1) << 40;
+    check_error(render(sparse(dir / "huge.obj", tebibyte), dir / "out", camera), 1,
+                {"huge.obj: " + std::to_string(tebibyte) + " bytes, more than the "});
+    CHECK_FALSE(fs::exists(dir / "out" / "stats.json"));
+    fs::remove_all(dir);
+}
+
 TEST_CASE("a frame whose AOV cannot be written leaves neither its image nor a record") {
     // A directory where the AOV goes makes its write fail, as a full disk would, without root.
     // The frame's image must not stay without it, nor replace an earlier run's.
@@ -186,6 +286,31 @@ TEST_CASE("a frame whose AOV cannot be written leaves neither its image nor a re
     CHECK(stats["frames"][0]["image"] == "a.png");
     REQUIRE(stats["failed_frames"].size() == 1);
     CHECK(stats["failed_frames"][0]["image"] == "b.png");
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a face past the triangulation budget: one error line with its line, at once") {
+    // One face of 20000 vertices: 20000^2 is past the 2^28 of triangulation work kdray allows
+    // (obj_validate.cpp), refused by the pre-scan before tinyobjloader's ear clipping, which
+    // would take seconds on it.
+    const fs::path dir = fresh_temp_dir("hostile-polygon");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    std::string text;
+    constexpr int kVertices = 20000;
+    for (int k = 0; k < kVertices; ++k) {
+        const double a = 2 * 3.14159265358979 * k / kVertices;
+        text += "v " + std::to_string(std::cos(a)) + " " + std::to_string(std::sin(a)) + " 0\n";
+    }
+    text += "f";
+    for (int k = 1; k <= kVertices; ++k) {
+        text += ' ';  // apart: GCC 12's -Wrestrict misreads " " + std::to_string(k)
+        text += std::to_string(k);
+    }
+    text += "\n";
+    const fs::path obj = write_text_file(dir / "disc.obj", text);
+    check_error(render(obj, dir / "out", camera), 1,
+                {"disc.obj:20001: face of 20000 vertices", "2^28"});
+    CHECK_FALSE(fs::exists(dir / "out" / "disc.png"));
     fs::remove_all(dir);
 }
 
