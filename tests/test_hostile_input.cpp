@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "core/image_codec.h"
 #include "core/kd_shared.h"
 #include "core/tree_file.h"
 #include "tests/support.h"
@@ -332,7 +333,9 @@ TEST_CASE("MTL files: values kdray cannot shade are errors with the MTL file and
             dir / "scene.obj", std::string("mtllib bad.mtl\nusemtl m\n") + kTriangleObj);
         check_error(render(obj, dir / "out", camera), 1, {"bad.mtl:3", c.problem});
     }
-    // An absolute mtllib path is the file it names (tinyobjloader would join it to the folder).
+    // An absolute mtllib path is the file it names (tinyobjloader would join it to the folder):
+    // its red applies. Lit by the headlight alone (no lights, no ambient), red Kd shades the
+    // triangle (0, 0, 0) to (1, 0, 0); the grey default would give three equal channels.
     write_text_file(dir / "lib" / "red.mtl", "newmtl red\nKd 1 0 0\n");
     const fs::path obj =
         write_text_file(dir / "abs.obj", "mtllib " + (dir / "lib" / "red.mtl").string() +
@@ -341,6 +344,39 @@ TEST_CASE("MTL files: values kdray cannot shade are errors with the MTL file and
     INFO(r.err);
     CHECK(r.status == 0);
     CHECK(r.err.find("warning") == std::string::npos);
+    const kdray::DecodedImage image = kdray::read_image(dir / "out" / "abs.png");
+    REQUIRE(image.width == 16);
+    REQUIRE(image.channels >= 3);
+    // The centre pixel looks at (0.3, 0.3, 0), inside the triangle.
+    const float* centre = &image.values[std::size_t(6 * 16 + 8) * std::size_t(image.channels)];
+    CHECK(centre[0] > 0.1f);
+    CHECK(centre[1] == 0.0f);
+    CHECK(centre[2] == 0.0f);
+
+    // A missing library, absolute or not, is a warning with the OBJ's line of its mtllib.
+    const fs::path gone =
+        write_text_file(dir / "gone.obj", "# made by hand\nmtllib " + (dir / "none.mtl").string() +
+                                              "\nusemtl red\n" + kTriangleObj);
+    const CommandResult missing = render(gone, dir / "out", camera);
+    CHECK(missing.status == 0);
+    CHECK(missing.err.rfind("kdray: warning: ", 0) == 0);
+    CHECK(missing.err.find("gone.obj:2: material library '" + (dir / "none.mtl").string() +
+                           "' not found") != std::string::npos);
+
+    // Ni 0 is what BART's exporter writes for opaque materials (26 in the Kitchen, 137 in the
+    // Robots), so it is accepted; a material that transmits with it is said, not silent.
+    for (const std::string illum : {"2", "7"}) {
+        CAPTURE(illum);
+        write_text_file(dir / "ni.mtl", "newmtl m\nKd 0.5 0.5 0.5\nNi 0\nillum " + illum + "\n");
+        const fs::path ni = write_text_file(
+            dir / "ni.obj", std::string("mtllib ni.mtl\nusemtl m\n") + kTriangleObj);
+        const CommandResult n = render(ni, dir / "out", camera);
+        CHECK(n.status == 0);
+        const bool warned = n.err.find(
+                                "material 'm' transmits light but has no index of "
+                                "refraction") != std::string::npos;
+        CHECK(warned == (illum == "7"));
+    }
     fs::remove_all(dir);
 }
 
