@@ -53,21 +53,55 @@ fs::path temporary_path(const fs::path& path) {
     return path.parent_path() / name;
 }
 
-void write_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
-    // Only a regular file is ever replaced: a device node, a FIFO, a directory or a symbolic
-    // link where the output should go is the user's, and renaming over it would destroy it.
+namespace {
+
+/// Refuses a target that exists and is not a regular file: a device node, a FIFO, a directory or
+/// a symbolic link where the output should go is the user's, and renaming over it would destroy
+/// it.
+void check_replaceable(const fs::path& path) {
     std::error_code ec;
     const fs::file_status existing = fs::symlink_status(path, ec);
     if (fs::exists(existing) && !fs::is_regular_file(existing))
         throw Error(path.string() + ": exists and is " + file_type_name(existing.type()) +
                     "; kdray replaces only regular files");
+}
+
+void rename_into_place(const fs::path& temp, const fs::path& path) {
+    std::error_code ec;
+    fs::rename(temp, path, ec);
+    if (ec)
+        throw Error(path.string() +
+                    ": cannot rename the finished file into place: " + ec.message());
+}
+
+/// `bytes` into the new file `temp`, every write and the close checked; errors name `path`.
+void write_new_file(const fs::path& temp, const fs::path& path, std::string_view bytes) {
+    // O_EXCL|O_NOFOLLOW: the temporary is new, never something already there or a link.
+    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    if (fd < 0) throw Error(path.string() + ": cannot write: " + std::strerror(errno));
+    std::size_t done = 0;
+    while (done < bytes.size()) {
+        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) {
+            const int error = errno;
+            ::close(fd);
+            throw Error(path.string() + ": write failed: " + std::strerror(error));
+        }
+        done += std::size_t(n);
+    }
+    // close() is where some file systems (NFS, full quotas) report a failed write.
+    if (::close(fd) != 0) throw Error(path.string() + ": write failed: " + std::strerror(errno));
+}
+
+}  // namespace
+
+void write_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+    check_replaceable(path);
     const fs::path temp = temporary_path(path);
     try {
         write(temp);
-        fs::rename(temp, path, ec);
-        if (ec)
-            throw Error(path.string() +
-                        ": cannot rename the finished file into place: " + ec.message());
+        rename_into_place(temp, path);
     } catch (...) {
         std::error_code ignored;
         fs::remove(temp, ignored);
@@ -76,26 +110,26 @@ void write_atomically(const fs::path& path, const std::function<void(const fs::p
 }
 
 void write_file_atomically(const fs::path& path, std::string_view bytes) {
-    write_atomically(path, [&](const fs::path& temp) {
-        // O_EXCL|O_NOFOLLOW: the temporary is new, never something already there or a link.
-        const int fd =
-            ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
-        if (fd < 0) throw Error(path.string() + ": cannot write: " + std::strerror(errno));
-        std::size_t done = 0;
-        while (done < bytes.size()) {
-            const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-            if (n < 0 && errno == EINTR) continue;
-            if (n < 0) {
-                const int error = errno;
-                ::close(fd);
-                throw Error(path.string() + ": write failed: " + std::strerror(error));
-            }
-            done += std::size_t(n);
+    write_files_atomically({{path, bytes}});
+}
+
+void write_files_atomically(const std::vector<FileContent>& files) {
+    for (const FileContent& file : files) check_replaceable(file.path);
+    std::vector<fs::path> temps;
+    std::size_t renamed = 0;
+    try {
+        for (const FileContent& file : files) {
+            temps.push_back(temporary_path(file.path));
+            write_new_file(temps.back(), file.path, file.bytes);
         }
-        // close() is where some file systems (NFS, full quotas) report a failed write.
-        if (::close(fd) != 0)
-            throw Error(path.string() + ": write failed: " + std::strerror(errno));
-    });
+        for (; renamed < files.size(); ++renamed)
+            rename_into_place(temps[renamed], files[renamed].path);
+    } catch (...) {
+        std::error_code ignored;
+        for (std::size_t i = 0; i < temps.size(); ++i)
+            fs::remove(i < renamed ? files[i].path : temps[i], ignored);
+        throw;
+    }
 }
 
 void remove_stale_temporaries(const fs::path& dir) {

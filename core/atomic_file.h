@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <functional>
 #include <string_view>
+#include <vector>
 
 namespace kdray {
 
@@ -26,6 +27,20 @@ void write_atomically(const std::filesystem::path& path,
 /// `bytes` as the whole content of `path`, atomically; every write and the close are checked
 /// (a full disk fails here, before the rename).
 void write_file_atomically(const std::filesystem::path& path, std::string_view bytes);
+
+/// One file of write_files_atomically: where it goes and its whole content.
+struct FileContent {
+    std::filesystem::path path;
+    std::string_view bytes;
+};
+
+/// Files that belong together (a frame's image and its AOV) written as one: every target is
+/// checked as write_atomically checks it, then every file is written under its temporary name,
+/// and only when all are written are they renamed into place, in the order given. A failure
+/// before the renames (a full disk, a directory where one goes) leaves every target as it was;
+/// a failed rename (which the checks leave unlikely) removes those already renamed, so that no
+/// part of the set is left beside older files of the others.
+void write_files_atomically(const std::vector<FileContent>& files);
 
 /// Removes the temporary files that a kdray process killed mid-write (SIGKILL, a power cut) left
 /// in `dir`: hidden files named by temporary_path whose process no longer runs.

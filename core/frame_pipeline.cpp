@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <utility>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/stats_json.h"
@@ -67,16 +68,14 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
     const std::filesystem::path aov_path = options_.out_dir / (stem + ".aov.exr");
     const auto write_start = FrameClock::now();
     if (output == Output::Write) {
-        write_image(image_path, result.image, settings_.exposure);
-        try {
-            if (options_.aov) write_aov(aov_path, result.hits);
-        } catch (const Error&) {
-            // A frame is its image and its AOV: one without the other is a failed frame, and
-            // it leaves neither (a full disk, say).
-            std::error_code ignored;
-            std::filesystem::remove(image_path, ignored);
-            throw;
-        }
+        // A frame is its image and its AOV: both are written before either is put into place,
+        // so that a failed one (a full disk, a directory where it goes) fails the frame with the
+        // folder as it was, an earlier run's files of the frame included.
+        const std::string image_bytes = encode_image(image_path, result.image, settings_.exposure);
+        const std::string aov_bytes = options_.aov ? encode_aov(aov_path, result.hits) : "";
+        std::vector<FileContent> files = {{image_path, image_bytes}};
+        if (options_.aov) files.push_back({aov_path, aov_bytes});
+        write_files_atomically(files);
     }
     const double write_ms = output == Output::Write ? ms_since(write_start) : 0.0;
 

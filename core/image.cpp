@@ -61,6 +61,14 @@ void check_size(const fs::path& path, int width, int height, std::size_t values,
 }  // namespace
 
 void write_image(const fs::path& path, const Image& image, float exposure_stops) {
+    write_file_atomically(path, encode_image(path, image, exposure_stops));
+}
+
+void write_aov(const fs::path& path, const HitBuffer& hits) {
+    write_file_atomically(path, encode_aov(path, hits));
+}
+
+std::string encode_image(const fs::path& path, const Image& image, float exposure_stops) {
     check_size(path, image.width, image.height, image.rgb.size(), 3, "image");
     const std::string ext = lower_extension(path);
     // conventions.md: every radiance that reaches an image is multiplied by 2^exposure.
@@ -69,10 +77,9 @@ void write_image(const fs::path& path, const Image& image, float exposure_stops)
         std::vector<std::uint8_t> pixels(image.rgb.size());
         for (std::size_t i = 0; i < pixels.size(); ++i)
             pixels[i] = std::uint8_t(std::lround(srgb_encode(scale * image.rgb[i]) * 255.0f));
-        write_file_atomically(path, encoded(path, [&] {
-                                  return encode_png_rgb8(image.width, image.height, pixels);
-                              }));
-    } else if (ext == ".exr") {
+        return encoded(path, [&] { return encode_png_rgb8(image.width, image.height, pixels); });
+    }
+    if (ext == ".exr") {
         ExrImage exr{image.width, image.height, {{"R"}, {"G"}, {"B"}}};
         const std::size_t pixels = std::size_t(image.width) * std::size_t(image.height);
         for (int c = 0; c < 3; ++c) {
@@ -83,14 +90,13 @@ void write_image(const fs::path& path, const Image& image, float exposure_stops)
                 std::memcpy(&words[i], &v, 4);
             }
         }
-        write_file_atomically(path, encoded(path, [&] { return encode_exr(exr); }));
-    } else {
-        throw Error("cannot write " + path.string() + ": unknown image extension '" +
-                    path.extension().string() + "' (use .png or .exr)");
+        return encoded(path, [&] { return encode_exr(exr); });
     }
+    throw Error("cannot write " + path.string() + ": unknown image extension '" +
+                path.extension().string() + "' (use .png or .exr)");
 }
 
-void write_aov(const fs::path& path, const HitBuffer& hits) {
+std::string encode_aov(const fs::path& path, const HitBuffer& hits) {
     check_size(path, hits.width, hits.height, hits.hits.size(), 1, "hit buffer");
     if (!hits.normals.empty() && hits.normals.size() != hits.hits.size())
         throw Error("cannot write " + path.string() + ": " + std::to_string(hits.normals.size()) +
@@ -115,7 +121,7 @@ void write_aov(const fs::path& path, const HitBuffer& hits) {
             for (int a = 0; a < 3; ++a) std::memcpy(&exr.channels[2 + a].words[i], &n[a], 4);
         }
     }
-    write_file_atomically(path, encoded(path, [&] { return encode_exr(exr); }));
+    return encoded(path, [&] { return encode_exr(exr); });
 }
 
 HitBuffer read_aov(const fs::path& path) {

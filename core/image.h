@@ -5,6 +5,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "core/kd_shared.h"
@@ -30,6 +31,11 @@ struct HitBuffer {
 void write_image(const std::filesystem::path& path, const Image& image,
                  float exposure_stops = 0.0f);
 void write_aov(const std::filesystem::path& path, const HitBuffer& hits);
+/// The bytes write_image and write_aov would write to `path` (its extension picks the format),
+/// for a caller that writes several files as one (write_files_atomically).
+std::string encode_image(const std::filesystem::path& path, const Image& image,
+                         float exposure_stops = 0.0f);
+std::string encode_aov(const std::filesystem::path& path, const HitBuffer& hits);
 HitBuffer read_aov(const std::filesystem::path& path);
 
 }  // namespace kdray

@@ -29,20 +29,19 @@ std::vector<std::string_view> tokens(std::string_view line) {
 struct NumericRule {
     std::string_view keyword;
     std::size_t min_values, max_values;
-    double lo, hi;
-    bool lo_open;  // lo itself is not allowed (Ni > 0)
+    double lo, hi;  // both allowed: Ni 0 too (mtl_prepare.h)
     bool integer;
     const char* range;  // for messages
 };
 
 constexpr double kInf = INFINITY;
 constexpr NumericRule kRules[] = {
-    {"Ka", 1, 3, 0, kInf, false, false, ">= 0"},    {"Kd", 1, 3, 0, kInf, false, false, ">= 0"},
-    {"Ks", 1, 3, 0, kInf, false, false, ">= 0"},    {"Ke", 1, 3, 0, kInf, false, false, ">= 0"},
-    {"Tf", 1, 3, 0, kInf, false, false, ">= 0"},    {"Kt", 1, 3, 0, kInf, false, false, ">= 0"},
-    {"Ns", 1, 1, 0, kInf, false, false, ">= 0"},    {"Ni", 1, 1, 0, kInf, false, false, ">= 0"},
-    {"d", 1, 1, 0, 1, false, false, "in [0, 1]"},   {"Tr", 1, 1, 0, 1, false, false, "in [0, 1]"},
-    {"illum", 1, 1, 0, 10, false, true, "0 to 10"},
+    {"Ka", 1, 3, 0, kInf, false, ">= 0"},    {"Kd", 1, 3, 0, kInf, false, ">= 0"},
+    {"Ks", 1, 3, 0, kInf, false, ">= 0"},    {"Ke", 1, 3, 0, kInf, false, ">= 0"},
+    {"Tf", 1, 3, 0, kInf, false, ">= 0"},    {"Kt", 1, 3, 0, kInf, false, ">= 0"},
+    {"Ns", 1, 1, 0, kInf, false, ">= 0"},    {"Ni", 1, 1, 0, kInf, false, ">= 0"},
+    {"d", 1, 1, 0, 1, false, "in [0, 1]"},   {"Tr", 1, 1, 0, 1, false, "in [0, 1]"},
+    {"illum", 1, 1, 0, 10, true, "0 to 10"},
 };
 
 }  // namespace
@@ -93,8 +92,8 @@ std::string prepare_mtl(std::string_view text, const std::string& name) {
             const std::string value(t[i].substr(0, 40));
             if (const char* problem = obj_number_problem(t[i], &v))
                 fail(std::string(rule->keyword) + " value '" + value + "' " + problem);
-            const bool in_range = (rule->lo_open ? v > rule->lo : v >= rule->lo) && v <= rule->hi &&
-                                  (!rule->integer || v == std::floor(v));
+            const bool in_range =
+                v >= rule->lo && v <= rule->hi && (!rule->integer || v == std::floor(v));
             if (!in_range)
                 fail(std::string(rule->keyword) + " value '" + value + "' must be " +
                      (rule->integer ? "an integer " : "a finite number ") + rule->range);

@@ -26,7 +26,9 @@ fs::path resolve(const fs::path& folder, const std::string& name) {
     std::error_code ec;
     const fs::path exact = folder / name;
     if (fs::is_regular_file(exact, ec)) return exact;
-    const fs::path dir = exact.parent_path();
+    // An OBJ named without a folder (`kdray render scene.obj`) has its textures in ".", which
+    // a directory_iterator over "" would not list.
+    const fs::path dir = exact.parent_path().empty() ? fs::path(".") : exact.parent_path();
     const std::string wanted = lower(exact.filename().string());
     for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec))
         if (lower(entry.path().filename().string()) == wanted && entry.is_regular_file(ec))
@@ -49,7 +51,9 @@ int TextureLoader::load(const std::string& material, const std::string& statemen
                                   file + "' " + why + "; it renders untextured");
         return -1;
     };
-    if (path.empty()) return warn("not found in " + folder_.string());
+    if (path.empty())
+        return warn("not found in " +
+                    (folder_.empty() ? std::string("the current directory") : folder_.string()));
     if (const auto it = loaded_.find(path); it != loaded_.end())
         return it->second >= 0 ? it->second : warn("cannot be read");
     DecodedImage image;

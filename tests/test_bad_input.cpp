@@ -7,6 +7,7 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -132,19 +133,42 @@ TEST_CASE("a missing MTL file is one warning line, exit 0, and recorded in stats
 }
 
 TEST_CASE("a texture the MTL file names but that does not exist does not stop the render") {
-    // kdray's material model has no textures (scene.h): map_Kd is ignored, so a missing map is
-    // not an error, and the image is rendered with Kd.
+    // A missing map_Kd is a warning naming the material, the statement, the file and where it
+    // was looked for; the material renders with its Kd.
     const fs::path dir = fresh_temp_dir("bad-input-texture");
-    write_text_file(dir / "scene.mtl", "newmtl red\nKd 1 0 0\nmap_Kd no_such_texture.png\n");
+    write_text_file(dir / "scene.mtl",
+                    "newmtl red\nKd 1 0 0\nmap_Kd no_such_texture.png\n"
+                    "newmtl cased\nKd 1 1 1\nmap_Kd CHECKER.png\n");
+    // Found though its case differs (Sponza's MTL names 00_SKAP.JPG for 00_skap.JPG).
+    kdray::Image checker;
+    checker.width = checker.height = 2;
+    checker.rgb.assign(12, 0.5f);
+    kdray::write_image(dir / "checker.png", checker);
     const fs::path obj = write_text_file(
-        dir / "scene.obj", std::string("mtllib scene.mtl\nusemtl red\n") + kTriangleObj);
+        dir / "scene.obj", std::string("mtllib scene.mtl\nusemtl red\n") + kTriangleObj +
+                               "usemtl cased\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4 5 6\n");
     const fs::path out = dir / "out";
     const CommandResult r = render(obj, out);
     INFO("stderr: " << r.err);
     CHECK(r.status == 0);
     CHECK(r.err.find("kdray: error") == std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(r.err.find("kdray: warning: " + obj.string() +
+                     ": material 'red': map_Kd 'no_such_texture.png' not found in " + dir.string() +
+                     "; it renders untextured") != std::string::npos);
     CHECK(fs::exists(out / "scene.png"));
     CHECK(fs::exists(out / "stats.json"));
+    // The same scene named without its folder, from inside it: the textures are looked up in
+    // the current directory, and the warning says so.
+    const std::string command = "cd '" + dir.string() + "' && '" + KDRAY_BINARY +
+                                "' render scene.obj -o here --builder reference --tracer "
+                                "reference -q 2>here.err";
+    CHECK(std::system(command.c_str()) == 0);
+    const std::string here = read_file(dir / "here.err");
+    INFO("stderr from the folder: " << here);
+    CHECK(std::count(here.begin(), here.end(), '\n') == 1);
+    CHECK(here.find("map_Kd 'no_such_texture.png' not found in the current directory;") !=
+          std::string::npos);
     fs::remove_all(dir);
 }
 

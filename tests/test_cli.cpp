@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -16,10 +17,12 @@
 #include "core/build_quality.h"
 #include "core/camera.h"
 #include "core/image.h"
+#include "core/image_codec.h"
 #include "core/kd_render.h"
 #include "core/natural_order.h"
 #include "core/reference_builder.h"
 #include "core/render_setup.h"
+#include "core/tree_check.h"
 #include "core/tree_file.h"
 #include "core/tree_stats.h"
 #include "tests/support.h"
@@ -260,7 +263,6 @@ TEST_CASE("render overrides --spp, --size and --ray-depth; --max-depth is refuse
     const HitBuffer aov = read_aov(dir / "out" / "scene.aov.exr");
     CHECK(aov.width == 16);
     CHECK(aov.height == 8);
-    CHECK(stats["frames"][0]["rays"]["reflection"] == 0);
     for (const char* size : {"16", "16x", "0x8", "16x8x2", "axb"}) {
         CAPTURE(size);
         r = run_kdray({"render", obj.string(), "-o", (dir / "bad").string(), "--size", size});
@@ -275,6 +277,147 @@ TEST_CASE("render overrides --spp, --size and --ray-depth; --max-depth is refuse
     }
     CHECK(!fs::exists(dir / "bad"));
     fs::remove_all(dir);
+}
+
+TEST_CASE(
+    "--ray-depth 1 stops every bounce, on both paths; --spp and --size set the primary rays") {
+    // The Cornell room has a mirror sphere (illum 3) and a glass one (illum 7): with its render
+    // file's max_depth of 6 some camera rays reflect and refract; with --ray-depth 1 a path ends
+    // at its first hit, so none does. Primary rays are one per sample of every pixel, and with
+    // spp > 1 one more, the pixel's centre ray (conventions.md: AOVs use the centre ray).
+    const fs::path room = source_dir() / "testdata" / "cornell" / "room.obj";
+    const fs::path render = source_dir() / "testdata" / "cornell" / "render.json";
+    for (const std::string path : {"opencl", "reference"}) {
+        CAPTURE(path);
+        const fs::path dir = fresh_temp_dir("cli-ray-depth-" + path);
+        auto run = [&](const fs::path& out, std::vector<std::string> extra) {
+            std::vector<std::string> args = {
+                "render",        room.string(), "-o",       out.string(), "--camera",
+                render.string(), "--spp",       "2",        "--size",     "16x12",
+                "--builder",     path,          "--tracer", path,         "-q"};
+            args.insert(args.end(), extra.begin(), extra.end());
+            return run_kdray(args, 300);
+        };
+        const CommandResult shallow = run(dir / "shallow", {"--ray-depth", "1"});
+        REQUIRE_MESSAGE(shallow.status == 0, shallow.err);
+        const CommandResult deep = run(dir / "deep", {});
+        REQUIRE_MESSAGE(deep.status == 0, deep.err);
+
+        const nlohmann::json one = read_json(dir / "shallow" / "stats.json");
+        CHECK(one["max_depth"] == 1);
+        CHECK(one["overrides"]["ray_depth"] == 1);
+        const nlohmann::json& one_rays = one["frames"][0]["rays"];
+        CHECK(one_rays["reflection"] == 0);
+        CHECK(one_rays["refraction"] == 0);
+        CHECK(one_rays["primary"] == (2 + 1) * 16 * 12);
+
+        const nlohmann::json six = read_json(dir / "deep" / "stats.json");
+        CHECK(six["max_depth"] == 6);  // the render file's
+        CHECK_FALSE(six["overrides"].contains("ray_depth"));
+        const nlohmann::json& six_rays = six["frames"][0]["rays"];
+        CHECK(six_rays["reflection"].get<long long>() > 0);
+        CHECK(six_rays["refraction"].get<long long>() > 0);
+        CHECK(six_rays["primary"] == (2 + 1) * 16 * 12);
+        for (const char* out : {"shallow", "deep"}) {
+            const DecodedImage image = read_image(dir / out / "room.png");
+            CHECK(image.width == 16);
+            CHECK(image.height == 12);
+        }
+        fs::remove_all(dir);
+    }
+}
+
+namespace {
+
+/// The depth of the deepest node under `index` (the root's depth is 0), walked from the layout
+/// of kd_shared.h alone: the below child follows its parent, the above child's index is stored.
+int deepest_level(const KdTree& tree, std::size_t index, int depth) {
+    REQUIRE(index < tree.nodes.size());
+    REQUIRE(depth <= KDRAY_MAX_DEPTH);
+    const KdNode node = tree.nodes[index];
+    if (kd_node_is_leaf(node)) return depth;
+    return std::max(deepest_level(tree, index + 1, depth + 1),
+                    deepest_level(tree, kd_node_above_child(node), depth + 1));
+}
+
+}  // namespace
+
+TEST_CASE("--tree-depth limits the depth of the tree both builders save; the tree stays sound") {
+    // The room's 2130 triangles build deeper than 3 levels by the SAH; at --tree-depth 3 every
+    // path from the root ends within 3 splits, and every triangle is still in each leaf it
+    // overlaps.
+    const fs::path room = source_dir() / "testdata" / "cornell" / "room.obj";
+    const Scene scene = load_obj(room);
+    for (const std::string builder : {"opencl", "reference"}) {
+        CAPTURE(builder);
+        const fs::path dir = fresh_temp_dir("cli-tree-depth-" + builder);
+        auto build = [&](const fs::path& tree_file, std::vector<std::string> extra) {
+            std::vector<std::string> args = {
+                "build", room.string(), "--json", "-o", tree_file.string(), "--builder", builder};
+            args.insert(args.end(), extra.begin(), extra.end());
+            const CommandResult r = run_kdray(args, 300);
+            REQUIRE_MESSAGE(r.status == 0, r.err);
+            return nlohmann::json::parse(r.out);
+        };
+        const nlohmann::json limited = build(dir / "limited.kdt", {"--tree-depth", "3"});
+        const nlohmann::json free = build(dir / "free.kdt", {});
+        const KdTree limited_tree = read_tree_file(dir / "limited.kdt").tree;
+        const KdTree free_tree = read_tree_file(dir / "free.kdt").tree;
+        const int limited_depth = deepest_level(limited_tree, 0, 0);
+        const int free_depth = deepest_level(free_tree, 0, 0);
+        CHECK(limited_depth <= 3);
+        CHECK(limited_depth >= 1);  // the room is split at all
+        CHECK(free_depth > 3);
+        CHECK(limited["params"]["max_depth"] == 3);
+        CHECK(limited["max_depth"] == limited_depth);
+        CHECK(free["max_depth"] == free_depth);
+        CHECK(check_tree(limited_tree, scene).empty());
+        fs::remove_all(dir);
+    }
+}
+
+TEST_CASE("render --help lists its options under their groups, each group once") {
+    const CommandResult r = run_kdray({"render", "--help"});
+    REQUIRE(r.status == 0);
+    // CLI11 prints a group as its name and a colon on a line of its own, then its options, one
+    // per line, indented: the group of an option is the last heading above it.
+    std::map<std::string, std::string> group_of;
+    std::map<std::string, int> headings;
+    std::string group;
+    std::istringstream help(r.out);
+    for (std::string line; std::getline(help, line);) {
+        if (!line.empty() && line[0] != ' ' && line.back() == ':') {
+            group = line.substr(0, line.size() - 1);
+            ++headings[group];
+            continue;
+        }
+        std::istringstream words(line);
+        std::string first;
+        words >> first;
+        if (first.rfind("--", 0) == 0 || first.rfind("-o,", 0) == 0 || first.rfind("-q,", 0) == 0)
+            for (std::size_t at = 0; at != std::string::npos;) {
+                const std::size_t comma = first.find(',', at);
+                group_of[first.substr(at, comma - at)] = group;
+                at = comma == std::string::npos ? comma : comma + 1;
+            }
+    }
+    for (const auto& [name, count] : headings) CHECK_MESSAGE(count == 1, name);
+    const std::map<std::string, std::vector<std::string>> expected = {
+        {"Image", {"--camera", "--spp", "--size", "--ray-depth", "--exposure"}},
+        {"Output", {"--output", "--name", "--skip-existing", "--aov", "--format", "--quiet"}},
+        {"Tracer", {"--tracer", "--threads", "--intersect", "--packets"}},
+        {"Frames", {"--frames", "--shard"}},
+        {"Device", {"--device"}},
+        {"Tree",
+         {"--builder", "--ct", "--ci", "--quality", "--large-threshold", "--small-stage",
+          "--tree-depth"}}};
+    for (const auto& [name, options] : expected)
+        for (const std::string& option : options) {
+            CAPTURE(option);
+            CHECK(group_of[option] == name);
+        }
+    // The retired --max-depth is refused, not offered.
+    CHECK(group_of.count("--max-depth") == 0);
 }
 
 TEST_CASE("kdray render writes images, AOVs that agree with brute force, and stats.json") {

@@ -5,14 +5,20 @@
 #include <doctest/doctest.h>
 
 #include <fcntl.h>
+#include <poll.h>
+#include <pty.h>
 #include <sys/file.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <future>
 #include <set>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -72,6 +78,89 @@ nlohmann::json timeless(const nlohmann::json& frame) {
             {"rays", frame["rays"]}};
 }
 
+/// What kdray wrote to a terminal: `started` is false when no pseudo-terminal could be had.
+struct TerminalRun {
+    bool started = false;
+    int status = -1;
+    std::string bytes;  // everything written to the terminal, stdout and stderr, as sent
+};
+
+/// Runs the kdray binary with `args` on a pseudo-terminal (its stdin, stdout and stderr), 200
+/// columns wide, as a user at a terminal runs it; killed after `timeout_s` seconds.
+TerminalRun run_kdray_on_terminal(const std::vector<std::string>& args, int timeout_s) {
+    TerminalRun run;
+    std::vector<std::string> argv_strings = {KDRAY_BINARY};
+    argv_strings.insert(argv_strings.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& a : argv_strings) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    struct winsize size {};
+    size.ws_col = 200;
+    size.ws_row = 50;
+    int terminal = -1;
+    const pid_t pid = ::forkpty(&terminal, nullptr, nullptr, &size);
+    if (pid < 0) return run;
+    if (pid == 0) {
+        ::execv(KDRAY_BINARY, argv.data());
+        ::_exit(127);
+    }
+    run.started = true;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(timeout_s);
+    char buffer[4096];
+    for (;;) {
+        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+                              deadline - std::chrono::steady_clock::now())
+                              .count();
+        if (left <= 0) {
+            ::kill(pid, SIGKILL);
+            break;
+        }
+        pollfd ready{terminal, POLLIN, 0};
+        const int n = ::poll(&ready, 1, int(left));
+        if (n == 0 || (n < 0 && errno == EINTR)) continue;
+        const ssize_t got = n > 0 ? ::read(terminal, buffer, sizeof buffer) : -1;
+        if (got > 0) {
+            run.bytes.append(buffer, std::size_t(got));
+            continue;
+        }
+        if (got < 0 && errno == EINTR) continue;
+        break;  // EIO: the process ended and closed the terminal
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ::close(terminal);
+    run.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return run;
+}
+
+/// The lines a terminal shows after `bytes`: '\r' moves to the start of the line, "\033[K"
+/// clears from there to its end, '\n' starts a new line, any other byte is drawn at the cursor.
+/// `other_escapes` counts escape sequences it does not know (the picture would be wrong).
+std::vector<std::string> terminal_lines(const std::string& bytes, int& other_escapes) {
+    std::vector<std::string> lines(1);
+    std::size_t column = 0;
+    other_escapes = 0;
+    for (std::size_t i = 0; i < bytes.size(); ++i) {
+        std::string& line = lines.back();
+        if (bytes[i] == '\r') {
+            column = 0;
+        } else if (bytes[i] == '\n') {
+            lines.emplace_back();
+            column = 0;
+        } else if (bytes.compare(i, 3, "\033[K") == 0) {
+            line.resize(std::min(line.size(), column));
+            i += 2;
+        } else {
+            other_escapes += bytes[i] == '\033';
+            if (column < line.size())
+                line[column] = bytes[i];
+            else
+                line.push_back(bytes[i]);
+            ++column;
+        }
+    }
+    return lines;
+}
 }  // namespace
 
 TEST_CASE("--name: placeholders expand, bad patterns are usage errors naming the pattern") {
@@ -242,6 +331,119 @@ TEST_CASE("runs into one folder add up: an interrupted run resumed equals one wh
         CHECK(none.status == 0);
         CHECK(read_json(dir / "parts" / "stats.json")["runs"].size() == 3);
     }
+}
+
+TEST_CASE("on a terminal a later frame's warning gets a line of its own, above the progress line") {
+    // The progress line is drawn only when stderr is a terminal, so the pipes of run_kdray never
+    // reach the code that clears it for a message. Frame 1 of 3 names a missing MTL file: its
+    // warning comes while the progress line shows frame 1/3.
+    const fs::path dir = fresh_temp_dir("cli-terminal");
+    for (int f = 0; f < 3; ++f) {
+        const fs::path obj =
+            write_obj(dir / "in" / ("f_" + std::to_string(f) + ".obj"), random_triangles(200, f));
+        if (f == 1) write_text_file(obj, "mtllib nowhere.mtl\n" + read_file(obj));
+    }
+    const TerminalRun run = run_kdray_on_terminal(
+        {"render", (dir / "in" / "f_*.obj").string(), "-o", (dir / "out").string(), "--size",
+         "16x12", "--builder", "reference", "--tracer", "reference"},
+        120);
+    if (!run.started) {
+        MESSAGE("skipped: no pseudo-terminal could be opened here (forkpty failed)");
+        return;
+    }
+    INFO("terminal bytes: " << nlohmann::json(run.bytes).dump());
+    REQUIRE(run.status == 0);
+    // The terminal path ran: the progress line was drawn in place, and the warning came after
+    // it was showing.
+    CHECK(run.bytes.find("\r\033[Kkdray: frame 1/3") != std::string::npos);
+    CHECK(run.bytes.find("kdray: frame 1/3") < run.bytes.find("kdray: warning: "));
+    int other_escapes = 0;
+    const std::vector<std::string> lines = terminal_lines(run.bytes, other_escapes);
+    CHECK(other_escapes == 0);
+    std::size_t warning_lines = 0;
+    for (const std::string& line : lines) {
+        const bool warning = line.find("warning") != std::string::npos;
+        const bool progress = line.find("kdray: frame ") != std::string::npos;
+        CHECK_MESSAGE(!(warning && progress), "a warning shares a line with progress: " << line);
+        if (!warning) continue;
+        ++warning_lines;
+        CHECK(line.rfind("kdray: warning: ", 0) == 0);
+        CHECK(line.find("f_1.obj:1: material library 'nowhere.mtl' not found") !=
+              std::string::npos);
+    }
+    CHECK(warning_lines == 1);
+    // The last progress line stays, ended by a newline.
+    CHECK(std::any_of(lines.begin(), lines.end(), [](const std::string& line) {
+        return line.rfind("kdray: frame 3/3", 0) == 0;
+    }));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("Ctrl-C, then --skip-existing into the same folder: every frame once, as one run") {
+    // The first run is interrupted once its first image exists; the second renders only what
+    // the first did not finish. Each frame is a different scene, so that an image written for
+    // the wrong frame, or a frame framed otherwise than in one whole run, shows.
+    const fs::path dir = fresh_temp_dir("cli-interrupt-resume");
+    constexpr int kFrames = 16;
+    for (int f = 0; f < kFrames; ++f)
+        write_obj(dir / "in" / ("f_" + std::to_string(f) + ".obj"),
+                  random_triangles(2000, std::uint32_t(100 + f)));
+    const std::string frames = (dir / "in" / "f_*.obj").string();
+    const fs::path out = dir / "out";
+    auto args = [&](const fs::path& folder) {
+        return std::vector<std::string>{"render",   frames,      "-o",        folder.string(),
+                                        "--size",   "24x16",     "--builder", "reference",
+                                        "--tracer", "reference", "-q"};
+    };
+    // SIGINT once the first image exists (polled, so a slow machine does not matter).
+    std::ostringstream script;
+    script << "'" << KDRAY_BINARY << "'";
+    for (const std::string& a : args(out)) script << " '" << a << "'";
+    script << " 2>/dev/null & pid=$!; while ! ls '" << out.string()
+           << "'/*.png >/dev/null 2>&1 && kill -0 $pid 2>/dev/null; do sleep 0.02; done; "
+           << "kill -INT $pid 2>/dev/null; wait $pid; exit $?";
+    const int status = std::system(script.str().c_str());
+    REQUIRE(WIFEXITED(status));
+    REQUIRE(WEXITSTATUS(status) == 130);
+    std::vector<int> first_run;
+    const nlohmann::json interrupted = read_json(out / "stats.json");
+    for (const auto& f : interrupted["frames"]) first_run.push_back(f["frame"].get<int>());
+    REQUIRE(!first_run.empty());
+    REQUIRE(first_run.size() < std::size_t(kFrames));
+
+    CommandResult resumed = run_kdray(
+        [&] {
+            std::vector<std::string> a = args(out);
+            a.push_back("--skip-existing");
+            return a;
+        }(),
+        300);
+    REQUIRE_MESSAGE(resumed.status == 0, resumed.err);
+    const nlohmann::json stats = read_json(out / "stats.json");
+    std::vector<int> listed, second_run;
+    for (const auto& f : stats["frames"]) listed.push_back(f["frame"].get<int>());
+    std::vector<int> all(kFrames);
+    for (int f = 0; f < kFrames; ++f) all[std::size_t(f)] = f;
+    std::sort(listed.begin(), listed.end());
+    CHECK(listed == all);  // each exactly once
+    REQUIRE(stats["runs"].size() == 2);
+    CHECK(stats["runs"][0]["frames_rendered"] == nlohmann::json(first_run));
+    std::set_difference(all.begin(), all.end(), first_run.begin(), first_run.end(),
+                        std::back_inserter(second_run));
+    CHECK(stats["runs"][1]["frames_rendered"] == nlohmann::json(second_run));
+
+    REQUIRE(run_kdray(args(dir / "whole"), 300).status == 0);
+    for (int f = 0; f < kFrames; ++f) {
+        const std::string image = "f_" + std::to_string(f) + ".png";
+        CAPTURE(image);
+        const std::string whole = read_file(dir / "whole" / image);
+        CHECK(!whole.empty());
+        CHECK(read_file(out / image) == whole);
+    }
+    for (const auto& entry : fs::directory_iterator(out))
+        CHECK_MESSAGE(entry.path().filename().string().find(".tmp") == std::string::npos,
+                      entry.path().filename().string());
+    fs::remove_all(dir);
 }
 
 TEST_CASE("a run merges into the folder under its lock: it waits while another holds it") {

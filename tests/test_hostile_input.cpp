@@ -9,6 +9,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -16,6 +18,9 @@
 #include <string>
 #include <vector>
 
+#include "core/image_codec.h"
+#include "core/kd_shared.h"
+#include "core/tree_file.h"
 #include "tests/support.h"
 
 namespace fs = std::filesystem;
@@ -149,6 +154,167 @@ TEST_CASE("a corrupt tree file is refused with its name; every corruption is cau
     fs::remove_all(dir);
 }
 
+TEST_CASE(
+    "a tree file with a sound checksum but an invalid tree is refused, named, with the fault") {
+    // The checksum catches damage; a file written with a broken tree and a checksum to match
+    // (another program, a bug in a builder) must still fail on what it holds. Each case patches
+    // one value of a valid file and recomputes the checksum as tree_file.cpp does.
+    const fs::path dir = fresh_temp_dir("hostile-tree-content");
+    const fs::path obj = write_obj(dir / "scene.obj", random_triangles(200, 3));
+    const fs::path tree_path = dir / "t.kdt";
+    const CommandResult built =
+        run_kdray({"build", obj.string(), "--builder", "reference", "-o", tree_path.string()});
+    REQUIRE_MESSAGE(built.status == 0, built.err);
+    const std::string good = read_file(tree_path);
+    const kdray::KdTree tree = kdray::read_tree_file(tree_path).tree;
+    REQUIRE(tree.nodes.size() > 1);
+    REQUIRE(!kd_node_is_leaf(tree.nodes[0]));
+    // The file ends with the nodes (a count, 8 bytes each), the leaf indices (a count, 4 bytes
+    // each) and the 8-byte checksum; it starts with the magic, the version, the scene's path,
+    // its triangle count and hash, the builder's name, then the parameters, C_t first.
+    const std::size_t checksum_at = good.size() - 8;
+    const std::size_t indices_at = checksum_at - 4 * tree.leaf_indices.size();
+    const std::size_t nodes_at = indices_at - 8 - 8 * tree.nodes.size();
+    auto u32_at = [&](std::size_t at) {
+        std::uint32_t v = 0;
+        std::memcpy(&v, good.data() + at, 4);
+        return v;
+    };
+    const std::size_t builder_at = 12 + 4 + u32_at(12) + 8 + 8;
+    const std::size_t traversal_cost_at = builder_at + 4 + u32_at(builder_at);
+    std::size_t filled_leaf = 0;
+    while (!kd_node_is_leaf(tree.nodes[filled_leaf]) || kd_leaf_count(tree.nodes[filled_leaf]) == 0)
+        ++filled_leaf;
+    struct Patch {
+        const char* what;
+        std::size_t at;
+        std::uint32_t value;
+        std::string problem;
+    };
+    float negative_cost = -15.0f;
+    std::uint32_t negative_cost_bits = 0;
+    std::memcpy(&negative_cost_bits, &negative_cost, 4);
+    const std::size_t nodes = tree.nodes.size();
+    const std::vector<Patch> patches = {
+        {"a leaf index of 4294967295", indices_at, 0xFFFFFFFFu,
+         "lists triangle 4294967295 of a scene of 200"},
+        {"the root's above child past the last node", nodes_at + 4,
+         std::uint32_t(nodes << 2) | kd_node_axis(tree.nodes[0]),
+         "node 0 has above child " + std::to_string(nodes)},
+        {"a leaf whose run ends past the leaf indices", nodes_at + 8 * filled_leaf,
+         std::uint32_t(tree.leaf_indices.size() + 1),
+         "leaf " + std::to_string(filled_leaf) + " names entries"},
+        {"a negative C_t (every SAH cost negative)", traversal_cost_at, negative_cost_bits, "C_t"}};
+    for (const Patch& patch : patches) {
+        INFO(std::string(patch.what));
+        std::string bad = good;
+        std::memcpy(bad.data() + patch.at, &patch.value, 4);
+        const std::uint64_t checksum =
+            kdray::tree_file_checksum(std::string_view(bad.data(), checksum_at));
+        std::memcpy(bad.data() + checksum_at, &checksum, 8);
+        const fs::path file = write_text_file(dir / "patched.kdt", bad);
+        check_error(run_kdray({"stats", file.string(), "--builder", "reference"}, kNoHang), 1,
+                    {"patched.kdt", patch.problem});
+    }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("inputs past their size limit are refused from their size, before any byte is read") {
+    // Sparse files: the sizes cost no disk. A render file is read up to 64 MiB, an MTL file up to
+    // 256 MiB (input_file.h's callers); an OBJ up to a quarter of the machine's memory, so one
+    // of 1 TiB is past it anywhere, and reading it would fail on memory, not on its size.
+    const fs::path dir = fresh_temp_dir("hostile-size");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path tri = write_text_file(dir / "tri.obj", kTriangleObj);
+    auto sparse = [&](const fs::path& path, std::uintmax_t bytes) {
+        std::ofstream(path).close();
+        fs::resize_file(path, bytes);
+        REQUIRE(fs::file_size(path) == bytes);
+        return path;
+    };
+    const std::uintmax_t render_limit = std::uintmax_t(64) << 20;
+    const std::uintmax_t mtl_limit = std::uintmax_t(256) << 20;
+    check_error(render(tri, dir / "out", sparse(dir / "huge.json", render_limit + 1)), 1,
+                {"huge.json: " + std::to_string(render_limit + 1) + " bytes, more than the " +
+                 std::to_string(render_limit) + " bytes kdray reads of one render file"});
+    sparse(dir / "huge.mtl", mtl_limit + 1);
+    const fs::path obj =
+        write_text_file(dir / "m.obj", std::string("mtllib huge.mtl\n") + kTriangleObj);
+    check_error(render(obj, dir / "out", camera), 1,
+                {"huge.mtl: " + std::to_string(mtl_limit + 1) + " bytes, more than the " +
+                 std::to_string(mtl_limit) + " bytes kdray reads of one MTL file"});
+    const std::uintmax_t tebibyte = std::uintmax_t(1) << 40;
+    check_error(render(sparse(dir / "huge.obj", tebibyte), dir / "out", camera), 1,
+                {"huge.obj: " + std::to_string(tebibyte) + " bytes, more than the "});
+    CHECK_FALSE(fs::exists(dir / "out" / "stats.json"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a frame whose AOV cannot be written leaves neither its image nor a record") {
+    // A directory where the AOV goes makes its write fail, as a full disk would, without root.
+    // The frame's image must not stay without it, nor replace an earlier run's.
+    const fs::path dir = fresh_temp_dir("hostile-aov");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path a = write_text_file(dir / "in" / "a.obj", kTriangleObj);
+    const fs::path b = write_text_file(dir / "in" / "b.obj", kTriangleObj);
+    fs::create_directories(dir / "one" / "a.aov.exr");
+    check_error(render(a, dir / "one", camera, {"--aov"}), 1, {"a.aov.exr", "directory"});
+    CHECK_FALSE(fs::exists(dir / "one" / "a.png"));
+    CHECK_FALSE(fs::exists(dir / "one" / "stats.json"));
+    // Rendered again, now with its AOV, the frame fails with the earlier run's image as it was
+    // (it was written, then removed with the failed AOV) and that run's record kept.
+    REQUIRE(render(a, dir / "again", camera).status == 0);
+    const std::string earlier = read_file(dir / "again" / "a.png");
+    REQUIRE(!earlier.empty());
+    fs::create_directories(dir / "again" / "a.aov.exr");
+    check_error(render(a, dir / "again", camera, {"--aov"}), 1, {"a.aov.exr", "directory"});
+    CHECK(read_file(dir / "again" / "a.png") == earlier);
+    CHECK(read_json(dir / "again" / "stats.json")["frames"].size() == 1);
+    // A later frame: the run stops at it; the frame before keeps its files and its record.
+    fs::create_directories(dir / "two" / "b.aov.exr");
+    const CommandResult r = run_kdray(
+        {"render", a.string(), b.string(), "-o", (dir / "two").string(), "--camera",
+         camera.string(), "--aov", "--builder", "reference", "--tracer", "reference", "-q"},
+        kNoHang);
+    INFO(r.err);
+    CHECK(r.status == 1);
+    CHECK(r.err.find("b.aov.exr") != std::string::npos);
+    CHECK(fs::exists(dir / "two" / "a.png"));
+    CHECK(fs::exists(dir / "two" / "a.aov.exr"));
+    CHECK_FALSE(fs::exists(dir / "two" / "b.png"));
+    const nlohmann::json stats = read_json(dir / "two" / "stats.json");
+    REQUIRE(stats["frames"].size() == 1);
+    CHECK(stats["frames"][0]["image"] == "a.png");
+    REQUIRE(stats["failed_frames"].size() == 1);
+    CHECK(stats["failed_frames"][0]["image"] == "b.png");
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a face past the triangulation budget: one error line with its line, at once") {
+    // One face of 20000 vertices: 20000^2 is past the 2^28 of triangulation work kdray allows
+    // (obj_validate.cpp), refused by the pre-scan before tinyobjloader's ear clipping, which
+    // would take seconds on it.
+    const fs::path dir = fresh_temp_dir("hostile-polygon");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    std::string text;
+    constexpr int kVertices = 20000;
+    for (int k = 0; k < kVertices; ++k) {
+        const double a = 2 * 3.14159265358979 * k / kVertices;
+        text += "v " + std::to_string(std::cos(a)) + " " + std::to_string(std::sin(a)) + " 0\n";
+    }
+    text += "f";
+    for (int k = 1; k <= kVertices; ++k) {
+        text += ' ';  // apart: GCC 12's -Wrestrict misreads " " + std::to_string(k)
+        text += std::to_string(k);
+    }
+    text += "\n";
+    const fs::path obj = write_text_file(dir / "disc.obj", text);
+    check_error(render(obj, dir / "out", camera), 1,
+                {"disc.obj:20001: face of 20000 vertices", "2^28"});
+    CHECK_FALSE(fs::exists(dir / "out" / "disc.png"));
+    fs::remove_all(dir);
+}
+
 TEST_CASE("MTL files: values kdray cannot shade are errors with the MTL file and line") {
     const fs::path dir = fresh_temp_dir("hostile-mtl");
     const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
@@ -167,7 +333,9 @@ TEST_CASE("MTL files: values kdray cannot shade are errors with the MTL file and
             dir / "scene.obj", std::string("mtllib bad.mtl\nusemtl m\n") + kTriangleObj);
         check_error(render(obj, dir / "out", camera), 1, {"bad.mtl:3", c.problem});
     }
-    // An absolute mtllib path is the file it names (tinyobjloader would join it to the folder).
+    // An absolute mtllib path is the file it names (tinyobjloader would join it to the folder):
+    // its red applies. Lit by the headlight alone (no lights, no ambient), red Kd shades the
+    // triangle (0, 0, 0) to (1, 0, 0); the grey default would give three equal channels.
     write_text_file(dir / "lib" / "red.mtl", "newmtl red\nKd 1 0 0\n");
     const fs::path obj =
         write_text_file(dir / "abs.obj", "mtllib " + (dir / "lib" / "red.mtl").string() +
@@ -176,6 +344,39 @@ TEST_CASE("MTL files: values kdray cannot shade are errors with the MTL file and
     INFO(r.err);
     CHECK(r.status == 0);
     CHECK(r.err.find("warning") == std::string::npos);
+    const kdray::DecodedImage image = kdray::read_image(dir / "out" / "abs.png");
+    REQUIRE(image.width == 16);
+    REQUIRE(image.channels >= 3);
+    // The centre pixel looks at (0.3, 0.3, 0), inside the triangle.
+    const float* centre = &image.values[std::size_t(6 * 16 + 8) * std::size_t(image.channels)];
+    CHECK(centre[0] > 0.1f);
+    CHECK(centre[1] == 0.0f);
+    CHECK(centre[2] == 0.0f);
+
+    // A missing library, absolute or not, is a warning with the OBJ's line of its mtllib.
+    const fs::path gone =
+        write_text_file(dir / "gone.obj", "# made by hand\nmtllib " + (dir / "none.mtl").string() +
+                                              "\nusemtl red\n" + kTriangleObj);
+    const CommandResult missing = render(gone, dir / "out", camera);
+    CHECK(missing.status == 0);
+    CHECK(missing.err.rfind("kdray: warning: ", 0) == 0);
+    CHECK(missing.err.find("gone.obj:2: material library '" + (dir / "none.mtl").string() +
+                           "' not found") != std::string::npos);
+
+    // Ni 0 is what BART's exporter writes for opaque materials (26 in the Kitchen, 137 in the
+    // Robots), so it is accepted; a material that transmits with it is said, not silent.
+    for (const std::string illum : {"2", "7"}) {
+        CAPTURE(illum);
+        write_text_file(dir / "ni.mtl", "newmtl m\nKd 0.5 0.5 0.5\nNi 0\nillum " + illum + "\n");
+        const fs::path ni = write_text_file(
+            dir / "ni.obj", std::string("mtllib ni.mtl\nusemtl m\n") + kTriangleObj);
+        const CommandResult n = render(ni, dir / "out", camera);
+        CHECK(n.status == 0);
+        const bool warned = n.err.find(
+                                "material 'm' transmits light but has no index of "
+                                "refraction") != std::string::npos;
+        CHECK(warned == (illum == "7"));
+    }
     fs::remove_all(dir);
 }
 
@@ -248,6 +449,19 @@ TEST_CASE("a full disk: the run fails naming the file, and no image is left unde
     // Nothing of the frame under a final name, and no temporary left.
     for (const auto& entry : fs::directory_iterator(mount / "out"))
         CHECK_MESSAGE(false, "left behind: " << entry.path().filename().string());
+
+    // A frame rendered again onto a full disk fails with the earlier run's image as it was.
+    fs::remove(mount / "filler");
+    const fs::path again = mount / "again";
+    REQUIRE(render(tri, again, write_text_file(dir / "small.json", kSmallRender)).status == 0);
+    const std::string earlier = read_file(again / "room.png");
+    REQUIRE(!earlier.empty());
+    write_text_file(mount / "filler", std::string(200 * 1024, 'x'));  // what fits: the disk full
+    const CommandResult full = render(tri, again, camera, {"--aov"});
+    CHECK(full.status == 1);
+    CHECK(read_file(again / "room.png") == earlier);
+    CHECK_FALSE(fs::exists(again / "room.aov.exr"));
+    CHECK(read_json(again / "stats.json")["frames"].size() == 1);
     CHECK(std::system(("umount '" + mount.string() + "'").c_str()) == 0);
     fs::remove_all(dir);
 }
