@@ -1,6 +1,7 @@
 #include "core/frame_pipeline.h"
 
 #include <algorithm>
+#include <optional>
 #include <utility>
 
 #include "core/atomic_file.h"
@@ -30,8 +31,24 @@ void FramePipeline::frame_on(const Scene& scene) {
 
 nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
                                            const std::function<void()>& computed) {
-    if (!job.scene) throw Error(job.input + ": render_frame without a scene");
-    const Scene& scene = *job.scene;
+    // Load: the scene the caller holds, else the loader's next one. The warm-up's scene stays in
+    // the loader for the frame it renders ahead of time.
+    std::optional<LoadedScene> loaded;
+    const Scene* scene_in = job.scene;
+    double load_ms = job.load_ms, load_wait_ms = job.load_wait_ms;
+    if (!scene_in && job.loader) {
+        if (output == Output::Discard) {
+            scene_in = &job.loader->peek().scene;
+        } else {
+            loaded = job.loader->take();
+            scene_in = &loaded->scene;
+            load_ms = loaded->load_ms;
+            load_wait_ms = ms_since(job.start);
+        }
+    }
+    if (!scene_in) throw Error(job.input + ": render_frame without a scene");
+    const Scene& scene = *scene_in;
+    if (job.loaded) job.loaded(scene);
     // Choose the camera: the render file's at this frame, else the first completed frame's view,
     // kept in the scene's units: each frame of an animation has a frame of its own.
     if (!settings_.camera_given && !framed_) {
@@ -60,6 +77,7 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
     // The AOV's distances in the scene's units.
     if (!scene.frame.is_identity())
         for (KdHit& hit : result.hits.hits) hit.t = scene.frame.scene_length(hit.t);
+    if (job.loader) job.loader->computed();
     if (computed) computed();
 
     // Write the image and the AOV, each whole or not at all.
@@ -98,15 +116,15 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
         {"effects", inputs.effects.to_json()},
         // What traced in packets, not what --packets asked for (stats.json's packets_requested).
         {"packets", {{"primary", result.primary_packets}, {"shadow", result.shadow_packets}}},
-        {"load_ms", job.load_ms},
-        {"load_wait_ms", job.load_wait_ms},
+        {"load_ms", load_ms},
+        {"load_wait_ms", load_wait_ms},
         {"compile_ms", compile_ms},
         {"build_ms", build_ms},
         {"trace_ms", trace_ms},
         {"write_ms", write_ms},
         // The stretches between the named ones: the render inputs, kernels made on first use,
         // the next frame's load started, the record's statistics.
-        {"other_ms", frame_ms - (job.load_wait_ms + compile_ms + build_ms + trace_ms + write_ms)},
+        {"other_ms", frame_ms - (load_wait_ms + compile_ms + build_ms + trace_ms + write_ms)},
         {"frame_ms", frame_ms},
         {"rays",
          {{"primary", rays.primary},

@@ -1,12 +1,12 @@
 // frame_pipeline.h — what a frame of `kdray render` is, whichever builder and tracer run it:
 // the scene loaded, its tree built, the frame traced, the image (and the hit AOV) written, and
-// the frame's stats.json record. The run and its warm-up go through the same render_frame; the
-// warm-up only writes nothing.
+// the frame's stats.json record. The run (core/render_run.h) and its warm-up go through the same
+// render_frame; the warm-up only writes nothing.
 //
 // A record's times add up: frame_ms = load_wait_ms + compile_ms + build_ms + trace_ms + write_ms
 // + other_ms, each a separate stretch of the frame's own wall time. load_ms is not one of them:
-// it is the load's own duration, mostly spent on another thread while the frame before rendered;
-// what the frame itself waited for its scene is load_wait_ms.
+// it is the load's own duration, mostly spent on another thread while the frame before rendered
+// (core/frame_loader.h); what the frame itself waited for its scene is load_wait_ms.
 #pragma once
 
 #include <chrono>
@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/camera.h"
+#include "core/frame_loader.h"
 #include "core/output_name.h"
 #include "core/render_file.h"
 #include "core/render_setup.h"
@@ -52,10 +53,17 @@ struct FrameOptions {
 struct FrameJob {
     std::size_t number = 0;
     std::string input;
+    /// A scene the caller loaded, with load_ms and load_wait_ms; or none, and `loader` holds it.
     const Scene* scene = nullptr;
     double load_ms = 0;
     double load_wait_ms = 0;
     FrameClock::time_point start = FrameClock::now();
+    /// Without `scene`: the run's loader, whose next scene is this frame's (render_frame's load
+    /// step measures load_ms and load_wait_ms).
+    FrameLoader* loader = nullptr;
+    /// Called once the scene is in, before the frame is framed and built (the run's first scene
+    /// announced: the device is open, the effects known).
+    std::function<void(const Scene&)> loaded = nullptr;
 };
 
 class FramePipeline {
@@ -65,12 +73,15 @@ class FramePipeline {
     FramePipeline(TreeBuilder& builder, Tracer& tracer, RenderSettings settings,
                   FrameOptions options);
 
-    /// Builds and traces `job`'s frame and, with Output::Write, writes its files; returns its
-    /// stats.json record. The builder and the tracer are prepared (their programs built, the
-    /// first frame's compile_ms) outside build_ms and trace_ms. `computed`, when given, runs once
-    /// the build and the trace are done, before the files are written. Without a camera in the
-    /// render file, frames are framed on the scene of the first frame rendered with Write
-    /// (unless frame_on chose another).
+    /// Loads (from `job.loader`, unless `job.scene` is given), builds and traces `job`'s frame
+    /// and, with Output::Write, writes its files; returns its stats.json record. The builder and
+    /// the tracer are prepared (their programs built, the first frame's compile_ms) outside
+    /// build_ms and trace_ms. Once the build and the trace are done, before the files are
+    /// written, the loader starts the next load (if it has not) and `computed`, when given, runs.
+    /// A frame rendered with Output::Discard (the warm-up) is the loader's next frame rendered
+    /// ahead of time: the loader keeps its scene for that frame. Without a camera in the render
+    /// file, frames are framed on the scene of the first frame rendered with Write (unless
+    /// frame_on chose another).
     /// Throws Error from any stage.
     nlohmann::json render_frame(const FrameJob& job, Output output = Output::Write,
                                 const std::function<void()>& computed = {});

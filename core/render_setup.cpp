@@ -225,4 +225,20 @@ RenderInputs prepare_render(const Scene& scene, const RenderSettings& settings,
     return in;
 }
 
+std::string intersect_name(kd_u32 intersect) {
+    return intersect == KDRAY_INTERSECT_MOLLER ? "moller" : "watertight";
+}
+
+std::string packets_name(RenderInputs::Packets packets) {
+    switch (packets) {
+        case RenderInputs::Packets::On:
+            return "on";
+        case RenderInputs::Packets::Off:
+            return "off";
+        case RenderInputs::Packets::Auto:
+            break;
+    }
+    return "auto";
+}
+
 }  // namespace kdray

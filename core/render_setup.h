@@ -65,4 +65,9 @@ struct RenderInputs {
 RenderInputs prepare_render(const Scene& scene, const RenderSettings& settings,
                             const Camera& camera, kd_u32 seed);
 
+/// The names `kdray render --intersect` and `--packets` take, as stats.json records them:
+/// "watertight" or "moller"; "auto", "on" or "off".
+std::string intersect_name(kd_u32 intersect);
+std::string packets_name(RenderInputs::Packets packets);
+
 }  // namespace kdray

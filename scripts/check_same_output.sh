@@ -72,7 +72,8 @@ strip_stats() {
     python3 - "$1" "$2" <<'EOF'
 import json, sys
 VOLATILE_SUFFIXES = ("_ms", "_per_s", "_per_second", "timings_ms")
-# frames_per_second_after_first is a rate too, which the suffixes miss.
+# The summary's frames_per_second_after_first is a rate too (1000 / mean frame_ms after each
+# run's first); it is not 0 only over two frames or more (testdata/anim), so --quick met it once.
 VOLATILE = {"device_bytes", "device_bytes_per_triangle", "kdray_version",
             "frames_per_second_after_first"}
 side_dir = sys.argv[2]

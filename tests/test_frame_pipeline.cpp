@@ -1,11 +1,16 @@
 // test_frame_pipeline.cpp — the frame pipeline and the backends behind it: the factory hands out
 // the builder and tracer a name asks for; the OpenCL tracer keeps one plan per combination and
 // traces the OpenCL builder's device-resident tree to the hits of the host tree; a frame rendered
-// for the warm-up (Output::Discard) is the frame the run renders, only unwritten.
+// for the warm-up (Output::Discard) is the frame the run renders, only unwritten; a render run
+// driven through the library (core/render_run.h) renders, reports and records its frames as
+// render_frame renders each on its own.
 #include <doctest/doctest.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "cl/backends.h"
 #include "cl/build/opencl_tree_builder.h"
@@ -16,7 +21,9 @@
 #include "core/frame_pipeline.h"
 #include "core/reference_builder.h"
 #include "core/reference_tracer.h"
+#include "core/render_run.h"
 #include "core/render_setup.h"
+#include "core/render_stats.h"
 #include "core/stats_json.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
@@ -192,4 +199,133 @@ TEST_CASE("frame pipeline: one summary for a run and for folders") {
     CHECK(both["frames_per_second_after_first"].get<double>() == doctest::Approx(1000.0 / 35.0));
     CHECK(both["mean_compile_ms"].get<double>() == doctest::Approx(3.0));  // absent: 0
     CHECK(both["frame_numbers"] == nlohmann::json::array({1, 2, 3, 4}));
+}
+
+namespace {
+
+/// What a run told its observer, in order; it interrupts the run after `stop_after` frames.
+struct RecordingObserver final : RenderRunObserver {
+    std::vector<std::string> events;
+    std::size_t rendered = 0;
+    std::size_t stop_after = SIZE_MAX;
+
+    void skipping(std::size_t skipped, std::size_t selected) override {
+        events.push_back("skipping " + std::to_string(skipped) + "/" + std::to_string(selected));
+    }
+    void first_scene(const nlohmann::json& effects) override {
+        events.push_back(std::string("first scene, shadows ") +
+                         (effects.value("shadows", false) ? "on" : "off"));
+    }
+    void frame_rendered(std::size_t position, std::size_t count,
+                        const nlohmann::json& record) override {
+        ++rendered;
+        events.push_back("frame " + std::to_string(record["frame"].get<std::size_t>()) + " (" +
+                         std::to_string(position + 1) + "/" + std::to_string(count) + ")");
+    }
+    void frame_failed(std::size_t frame, const Error&) override {
+        events.push_back("failed " + std::to_string(frame));
+    }
+    void progress(std::size_t done, std::size_t count, double) override {
+        events.push_back("progress " + std::to_string(done) + "/" + std::to_string(count));
+    }
+    void frames_finished() override { events.push_back("finished"); }
+    bool interrupted() override { return rendered >= stop_after; }
+};
+
+/// Two frames of testdata/anim with its render file (keyframed camera, two lights), small.
+RenderRunSettings anim_run(const fs::path& out_dir) {
+    const fs::path anim = test::source_dir() / "testdata" / "anim";
+    RenderRunSettings run;
+    run.inputs = {(anim / "frame_000.obj").string(), (anim / "frame_001.obj").string()};
+    run.selected = {0, 1};
+    run.render_file = (anim / "render.json").string();
+    run.render = load_render_file(run.render_file);
+    run.render.width = 48;
+    run.render.height = 27;
+    run.overrides = {{"size", "48x27"}};
+    run.frame.out_dir = out_dir;
+    run.frame.aov = true;
+    return run;
+}
+
+}  // namespace
+
+TEST_CASE("render run: an animation through the library, observed and merged into stats.json") {
+    // The run's load step (the loader, one frame ahead) against a scene loaded by hand: a loader
+    // that handed a frame the wrong scene, or a run that framed it with another camera, would
+    // write another image.
+    const fs::path dir = test::fresh_temp_dir("render-run");
+    RecordingObserver seen;
+    ReferenceTreeBuilder builder({});
+    ReferenceTracer tracer(1);
+    RenderRun run(anim_run(dir / "run"), seen);
+    REQUIRE(run.frames() == std::vector<std::size_t>{0, 1});
+    const RenderRunOutcome outcome = run.run(builder, tracer);
+    CHECK(outcome.frames == 2);
+    CHECK(outcome.rendered == 2);
+    CHECK(outcome.failed == 0);
+    CHECK_FALSE(outcome.interrupted);
+    CHECK(seen.events == std::vector<std::string>{"first scene, shadows on", "frame 0 (1/2)",
+                                                  "progress 1/2", "frame 1 (2/2)", "progress 2/2",
+                                                  "finished"});
+
+    const nlohmann::json stats = read_render_stats(dir / "run" / "stats.json");
+    REQUIRE(stats["frames"].size() == 2);
+    for (std::size_t i = 0; i < 2; ++i) {
+        const nlohmann::json& record = stats["frames"][i];
+        CHECK(record["frame"] == i);
+        CHECK(record["image"] == "frame_00" + std::to_string(i) + ".png");
+        CHECK(record["aov"] == "frame_00" + std::to_string(i) + ".aov.exr");
+        CHECK(record["tracer"] == "reference");
+        CHECK(record["run"] == 0);
+        CHECK(record["load_ms"].get<double>() > 0);
+    }
+    CHECK(stats["builder"] == "reference (CPU, full SAH)");
+    CHECK(stats["image"]["width"] == 48);
+    CHECK(stats["overrides"]["size"] == "48x27");
+    CHECK(stats["intersect"] == "watertight");
+    CHECK(stats["packets_requested"] == "auto");
+    CHECK(stats["runs"].size() == 1);
+    CHECK(stats["runs"][0]["frames_rendered"] == nlohmann::json::array({0, 1}));
+    CHECK(stats["summary"]["frames"] == 2);
+    CHECK_FALSE(stats.contains("failed_frames"));
+    CHECK_FALSE(stats.contains("interrupted_after_frames"));
+
+    // Frame 1 by render_frame alone, from a scene loaded here, into another folder.
+    RenderRunSettings alone = anim_run(dir / "alone");
+    fs::create_directories(alone.frame.out_dir);
+    ReferenceTreeBuilder alone_builder({});
+    ReferenceTracer alone_tracer(1);
+    FramePipeline pipeline(alone_builder, alone_tracer, alone.render, alone.frame);
+    const Scene scene = load_obj(alone.inputs[1]);
+    pipeline.render_frame({1, alone.inputs[1], &scene});
+    for (const char* file : {"frame_001.png", "frame_001.aov.exr"}) {
+        const std::string bytes = test::read_file(dir / "alone" / file);
+        CHECK_FALSE(bytes.empty());
+        CHECK_MESSAGE(test::read_file(dir / "run" / file) == bytes, file);
+    }
+
+    // Resumed with --skip-existing: both frames are in the folder, nothing is left to render.
+    RecordingObserver resumed;
+    RenderRunSettings again = anim_run(dir / "run");
+    again.skip_existing = true;
+    RenderRun nothing_left(std::move(again), resumed);
+    CHECK(nothing_left.frames().empty());
+    CHECK(resumed.events == std::vector<std::string>{"skipping 2/2"});
+
+    // Interrupted after the first frame: that frame is complete and recorded, the second never
+    // starts.
+    RecordingObserver stopped;
+    stopped.stop_after = 1;
+    RenderRun interrupted(anim_run(dir / "interrupted"), stopped);
+    const RenderRunOutcome cut = interrupted.run(builder, tracer);
+    CHECK(cut.interrupted);
+    CHECK(cut.rendered == 1);
+    CHECK(stopped.events.back() == "finished");
+    const nlohmann::json cut_stats = read_render_stats(dir / "interrupted" / "stats.json");
+    CHECK(cut_stats["frames"].size() == 1);
+    CHECK(cut_stats["interrupted_after_frames"] == 1);
+    CHECK(fs::exists(dir / "interrupted" / "frame_000.png"));
+    CHECK_FALSE(fs::exists(dir / "interrupted" / "frame_001.png"));
+    fs::remove_all(dir);
 }
