@@ -62,6 +62,10 @@ std::string encode_exr(const ExrImage& image) {
             spec.channelformats.push_back(c.is_uint ? OIIO::TypeDesc::UINT : OIIO::TypeDesc::FLOAT);
     else
         spec.attribute("oiio:ColorSpace", "linear");
+    // OpenImageIO stamps an EXR with the time it was written unless DateTime is given: the
+    // same frame rendered twice must be the same bytes (check_same_output.sh, the tests that
+    // compare AOVs file for file), so the AOV carries no time. PNGs never had one.
+    spec.attribute("DateTime", "");
 
     // Native layout: every channel is 4 bytes, packed per pixel in the spec's channel order.
     const std::size_t pixels = std::size_t(image.width) * std::size_t(image.height);
