@@ -2,9 +2,11 @@
  *
  * This is the one place these layouts are written down: the kernels include it (CMake inlines it
  * into the embedded program source) and the host includes it from core/ and cl/. Rules, so that
- * both compilers lay the structs out identically: only 32-bit scalars (kd_u32, kd_i32, kd_f32) and
- * arrays of them, explicit padding, no bool/size_t/pointers/enums/bitfields/float3. Every struct
- * states its size; the host static_asserts it and a test kernel reports the device's sizeof.
+ * both compilers lay the structs out identically: only 32-bit scalars (kd_u32, kd_i32, kd_f32),
+ * arrays of them and structs of this header made of them, explicit padding, no
+ * bool/size_t/pointers/enums/bitfields/float3. Every struct states its size; the host
+ * static_asserts it (and the offset of a nested struct's next word) and a test kernel reports the
+ * device's sizeof.
  *
  * Tree layout (preorder, as in pbrt's KdTreeAccel): node 0 is the root; an inner node's below
  * child is the next node in the array and its above child's index is stored in the node. A leaf
@@ -42,6 +44,7 @@ typedef float kd_f32;
 #define KDRAY_AS_UINT(f) as_uint(f)
 #else
 #include <bit>
+#include <cstddef>
 #include <cstdint>
 typedef std::uint32_t kd_u32;
 typedef std::int32_t kd_i32;
@@ -142,11 +145,11 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_EFFECT_AREA_LIGHTS 16u /* emissive triangles light the scene (kd_area_light.h) */
 #define KDRAY_EFFECT_TEXTURES 32u    /* map_Kd and map_Ka at the hits' vt (kd_texture.h) */
 
-/* What kd_render_pixels reads and writes besides the image and the centre hits (its `outputs`
- * argument): the primary rays' hits come traced already (by kd_trace_camera_packets), so do the
- * shadow rays from them (by kd_trace_shadow_packets), and the centre hits' normals are wanted.
- * Per-pixel ray counts are written exactly when the kernel was built with some effect: without
- * any, a pixel casts its primary rays and nothing else. */
+/* What kd_render_pixels reads and writes besides the image and the centre hits
+ * (KdRenderLaunch.outputs): the primary rays' hits come traced already (by
+ * kd_trace_camera_packets), so do the shadow rays from them (by kd_trace_shadow_packets), and the
+ * centre hits' normals are wanted. Per-pixel ray counts are written exactly when the kernel was
+ * built with some effect: without any, a pixel casts its primary rays and nothing else. */
 #define KDRAY_RENDER_TRACED_PRIMARY 1u
 #define KDRAY_RENDER_NORMALS 2u
 #define KDRAY_RENDER_TRACED_SHADOWS 4u
@@ -264,6 +267,64 @@ typedef struct KdRayCounts {
     kd_u32 area_shadow;
 } KdRayCounts;
 
+/* ---- The render kernels' by-value arguments. ----
+ *
+ * The render kernels (cl/render/kernels/render.cl) take the tree's three buffers (nodes,
+ * leaf_indices, triangles: the builder's own, traced where it left them), their outputs, and two
+ * records: KdRenderLaunch, what a launch knows besides its buffers, and KdSceneLayout, where the
+ * frame's read-only shading arrays lie in one buffer, `scene_data`. Each array of that buffer
+ * starts at a byte offset that is a multiple of KDRAY_SCENE_ALIGN: of every element's alignment
+ * (4 bytes: the structs above hold only 32-bit words) and of a cache line (64 bytes on a CPU,
+ * 128 on a GPU), so that no array starts inside the line where the one before it ends. */
+#define KDRAY_SCENE_ALIGN 128u
+
+/* KdSceneLayout — 48 bytes: the byte offsets in `scene_data` of the frame's read-only arrays, in
+ * the order they lie there (the host lays them out: cl/render/scene_arrays.h), and which are
+ * present. An array the frame does not use (lights without shadows, the texture arrays without
+ * textures) has no bytes and an offset that is never read.
+ *   materials       KdMaterial per material id (Scene::material_ids' values)
+ *   lights          KdLight, KdView.light_count of them
+ *   emitters        KdEmitter, KdView.emitter_count of them (read with area lights only)
+ *   textures        the texture table, KdTexture per texture (with textures only)
+ *   material_ids    kd_u32 per triangle
+ *   vertex_normals  KDRAY_FLOATS_PER_TRIANGLE floats per triangle: unit normals at its corners
+ *                   (read only when has_vertex_normals)
+ *   texcoords       6 floats per triangle: its vt corners, u NaN where it has none (textures)
+ *   texels          the texel atlas, 4 floats per texel (textures); last, so that it alone may
+ *                   reach past the 4 GiB that 32-bit offsets address
+ *   has_vertex_normals  1: the scene has vertex normals and shades smooth; 0: flat
+ *   pad             0 */
+typedef struct KdSceneLayout {
+    kd_u32 materials;
+    kd_u32 lights;
+    kd_u32 emitters;
+    kd_u32 textures;
+    kd_u32 material_ids;
+    kd_u32 vertex_normals;
+    kd_u32 texcoords;
+    kd_u32 texels;
+    kd_u32 has_vertex_normals;
+    kd_u32 pad[3];
+} KdSceneLayout;
+
+/* KdRenderLaunch — 160 bytes: what a launch of a render kernel (kd_trace_camera_packets,
+ * kd_trace_shadow_packets, kd_render_pixels, kd_shade_traced_pixels) knows besides its buffers.
+ *   view       bytes 0-111: the frame's camera and settings (KdView, 32-bit words only, so
+ *              nested without padding)
+ *   bounds     the tree's root box, lo.xyz hi.xyz
+ *   first_row  the launch's first image row; rows: its number of rows (work-items past them
+ *              return at once)
+ *   outputs    KDRAY_RENDER_* bits
+ *   pad        0 */
+typedef struct KdRenderLaunch {
+    KdView view;
+    kd_f32 bounds[6];
+    kd_u32 first_row;
+    kd_u32 rows;
+    kd_u32 outputs;
+    kd_u32 pad[3];
+} KdRenderLaunch;
+
 #ifndef KDRAY_DEVICE_CODE
 static_assert(sizeof(KdMaterial) == 96, "KdMaterial is 96 bytes on every device");
 static_assert(sizeof(KdTexture) == 16, "KdTexture is 16 bytes on every device");
@@ -271,6 +332,10 @@ static_assert(sizeof(KdLight) == 32, "KdLight is 32 bytes on every device");
 static_assert(sizeof(KdView) == 112, "KdView is 112 bytes on every device");
 static_assert(sizeof(KdRayCounts) == 20, "KdRayCounts is 20 bytes on every device");
 static_assert(sizeof(KdEmitter) == 16, "KdEmitter is 16 bytes on every device");
+static_assert(sizeof(KdSceneLayout) == 48, "KdSceneLayout is 48 bytes on every device");
+static_assert(sizeof(KdRenderLaunch) == 160, "KdRenderLaunch is 160 bytes on every device");
+static_assert(offsetof(KdRenderLaunch, bounds) == sizeof(KdView),
+              "KdRenderLaunch's view is nested without padding");
 #endif
 
 #endif /* KDRAY_KD_SHARED_H */

@@ -11,8 +11,10 @@
 
 #include "cl/render/opencl_renderer.h"
 #include "cl/render/opencl_tracer.h"
+#include "cl/render/scene_arrays.h"
 #include "cl/runtime/program_cache.h"
 #include "core/camera.h"
+#include "core/error.h"
 #include "core/kd_render.h"
 #include "core/reference_builder.h"
 #include "core/reference_tracer.h"
@@ -441,4 +443,43 @@ TEST_CASE("opencl render: packets whose lanes walk a node's children in opposite
     REQUIRE(inputs.view.forward[axis] == 0.0f);
     REQUIRE(inputs.view.up[axis] == 0.0f);
     check_packets(scene, tree, inputs);
+}
+
+TEST_CASE(
+    "opencl render: the scene arrays' layout is aligned, in order, and refuses 32-bit overflow") {
+    // Sizes that are no multiple of the alignment, an empty array in the middle (no lights) and
+    // an empty vertex-normal array (flat shading): each array starts at the first aligned byte
+    // after the one before, and an empty one takes no room.
+    SceneArrays a;
+    a.materials.bytes = 3 * sizeof(KdMaterial);
+    a.emitters.bytes = sizeof(KdEmitter);
+    a.textures.bytes = 2 * sizeof(KdTexture);
+    a.material_ids.bytes = 1001 * sizeof(kd_u32);
+    a.texcoords.bytes = 1001 * 6 * sizeof(float);
+    a.texels.bytes = 5 * 4 * sizeof(float);
+    std::size_t total = 0;
+    const KdSceneLayout l = layout_scene_arrays(a, &total);
+    const kd_u32 offsets[] = {l.materials,    l.lights,         l.emitters,  l.textures,
+                              l.material_ids, l.vertex_normals, l.texcoords, l.texels};
+    for (kd_u32 offset : offsets) CHECK(offset % KDRAY_SCENE_ALIGN == 0u);
+    CHECK(l.materials == 0u);
+    CHECK(l.lights == 384u);  // 288 bytes of materials, rounded up to 128
+    CHECK(l.emitters == l.lights);
+    CHECK(l.textures == 512u);
+    CHECK(l.material_ids == 640u);
+    CHECK(l.vertex_normals == 4736u);  // 640 + 4004 bytes of ids, rounded up
+    CHECK(l.texcoords == l.vertex_normals);
+    CHECK(l.texels == 28800u);  // 4736 + 24024, rounded up
+    CHECK(total == 28800u + a.texels.bytes);
+    CHECK(l.has_vertex_normals == 0u);
+    a.vertex_normals.bytes = 1001 * KDRAY_FLOATS_PER_TRIANGLE * sizeof(float);
+    CHECK(layout_scene_arrays(a, &total).has_vertex_normals == 1u);
+
+    // The atlas, last, may reach past 4 GiB; an array before it may not end there, since the
+    // atlas's offset would not fit in 32 bits.
+    a.texels.bytes = std::size_t(5) << 30;
+    CHECK(layout_scene_arrays(a, &total).texels < 0xFFFFFFFFu);
+    CHECK(total > (std::size_t(4) << 30));
+    a.texcoords.bytes = std::size_t(4) << 30;
+    CHECK_THROWS_AS(layout_scene_arrays(a, &total), Error);
 }

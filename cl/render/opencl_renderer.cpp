@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <iterator>
 #include <string>
+#include <utility>
 
+#include "cl/render/scene_arrays.h"
 #include "cl/runtime/cl_error.h"
 #include "cl/runtime/launch.h"
 #include "cl/runtime/program_cache.h"
@@ -78,13 +81,12 @@ std::size_t round_up(std::size_t n, std::size_t multiple) {
 
 /// The device buffers a frame's kernels read and write.
 struct RenderBuffers {
-    cl::Buffer nodes, leaf_indices, triangles, material_ids, materials, lights, emitters, bounds;
-    /// With textures the scene's vt corners, texture table and texel atlas, else any buffers.
-    cl::Buffer texcoords, textures, texels;
+    /// The tree, where the builder left it or uploaded.
+    cl::Buffer nodes, leaf_indices, triangles;
+    /// The frame's read-only shading arrays (cl/render/scene_arrays.h) and where each lies.
+    cl::Buffer scene_data;
+    KdSceneLayout layout{};
     cl::Buffer rgb, hits, normals, counts, traced, occluded;
-    /// The scene's vertex normals when has_vertex_normals, else any buffer (never read).
-    cl::Buffer vertex_normals;
-    kd_u32 has_vertex_normals = 0;
 };
 
 /// The image rows of one launch: `count` rows from `first`.
@@ -93,60 +95,70 @@ struct LaunchRows {
 };
 
 // Each launch sets every argument of its kernel in the order of the kernel's signature in
-// render.cl, the per-launch rows among them: one list per kernel, no argument set by position.
+// render.cl: one list per kernel, no argument set by position.
 
-/// kd_render_pixels or kd_shade_traced_pixels (the same arguments) over `rows`, in tiles. A
-/// width of 0 (the warm-up's empty view) still launches one tile.
-void launch_pixels(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b, const KdView& view,
-                   LaunchRows rows, kd_u32 outputs) {
-    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.material_ids, b.materials,
-                    b.lights, b.emitters, b.texcoords, b.textures, b.texels, b.bounds, view,
-                    kd_u32(rows.first), kd_u32(rows.count), b.rgb, b.hits, b.normals, b.counts,
-                    b.traced, b.occluded, outputs, b.vertex_normals, b.has_vertex_normals);
+/// kd_render_pixels or kd_shade_traced_pixels (the same arguments) over the launch's rows, in
+/// tiles. A width of 0 (the warm-up's empty view) still launches one tile.
+void launch_pixels(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
+                   const KdRenderLaunch& launch) {
+    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.scene_data, b.layout, launch,
+                    b.rgb, b.hits, b.normals, b.counts, b.traced, b.occluded);
     device.queue().enqueueNDRangeKernel(
         kernel, cl::NullRange,
-        cl::NDRange(round_up(std::max<std::size_t>(1, view.width), kTileWidth),
-                    round_up(rows.count, kTileHeight)),
+        cl::NDRange(round_up(std::max<std::size_t>(1, launch.view.width), kTileWidth),
+                    round_up(launch.rows, kTileHeight)),
         cl::NDRange(kTileWidth, kTileHeight));
 }
 
-/// A packet kernel's launch over `rows`: a work-item per tile and primary ray of its pixels.
-void enqueue_packet_tiles(ClDevice& device, cl::Kernel& kernel, const KdView& view,
-                          LaunchRows rows) {
+/// A packet kernel's launch over the launch's rows: a work-item per tile and primary ray of its
+/// pixels.
+void enqueue_packet_tiles(ClDevice& device, cl::Kernel& kernel, const KdRenderLaunch& launch) {
     // At least one tile: the warm-up's empty view would make a global size of 0, which OpenCL
     // 1.2 rejects (each work-item returns at once past the image).
     const std::size_t tiles_x =
-        std::max<std::size_t>(1, (view.width + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE);
-    const std::size_t tiles_y = (rows.count + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
-    device.queue().enqueueNDRangeKernel(
-        kernel, cl::NullRange,
-        cl::NDRange(round_up(tiles_x, kPacketGroup), tiles_y, kd_primary_rays_per_pixel(&view)),
-        cl::NDRange(kPacketGroup, 1, 1));
+        std::max<std::size_t>(1, (launch.view.width + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE);
+    const std::size_t tiles_y = (launch.rows + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
+    device.queue().enqueueNDRangeKernel(kernel, cl::NullRange,
+                                        cl::NDRange(round_up(tiles_x, kPacketGroup), tiles_y,
+                                                    kd_primary_rays_per_pixel(&launch.view)),
+                                        cl::NDRange(kPacketGroup, 1, 1));
 }
 
-/// kd_trace_camera_packets over `rows`.
+/// kd_trace_camera_packets over the launch's rows.
 void launch_camera_packets(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
-                           const KdView& view, LaunchRows rows) {
-    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.bounds, view,
-                    kd_u32(rows.first), kd_u32(rows.count), b.traced);
-    enqueue_packet_tiles(device, kernel, view, rows);
+                           const KdRenderLaunch& launch) {
+    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, launch, b.traced);
+    enqueue_packet_tiles(device, kernel, launch);
 }
 
-/// kd_trace_shadow_packets over `rows`.
+/// kd_trace_shadow_packets over the launch's rows.
 void launch_shadow_packets(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
-                           const KdView& view, LaunchRows rows) {
-    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.bounds, view,
-                    kd_u32(rows.first), kd_u32(rows.count), b.lights, b.traced, b.occluded,
-                    b.vertex_normals, b.has_vertex_normals);
-    enqueue_packet_tiles(device, kernel, view, rows);
+                           const KdRenderLaunch& launch) {
+    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.scene_data, b.layout, launch,
+                    b.traced, b.occluded);
+    enqueue_packet_tiles(device, kernel, launch);
 }
 
-/// The launches of `rows`: the packets' primary hits and shadows first, then the pixels.
+/// The launch record of a frame's launches, their rows unset.
+KdRenderLaunch frame_launch(const KdView& view, const Aabb& bounds, kd_u32 outputs) {
+    KdRenderLaunch launch{};
+    launch.view = view;
+    const float box[6] = {bounds.lo.x, bounds.lo.y, bounds.lo.z,
+                          bounds.hi.x, bounds.hi.y, bounds.hi.z};
+    std::copy(std::begin(box), std::end(box), launch.bounds);
+    launch.outputs = outputs;
+    return launch;
+}
+
+/// The launches of `rows` with the frame's launch record: the packets' primary hits and shadows
+/// first, then the pixels.
 void launch_rows(ClDevice& device, OpenClRenderPlan& plan, const RenderBuffers& b,
-                 const KdView& view, LaunchRows rows, kd_u32 outputs) {
-    if (plan.choice.packets) launch_camera_packets(device, plan.packet, b, view, rows);
-    if (plan.choice.shadow_packets) launch_shadow_packets(device, plan.shadow, b, view, rows);
-    launch_pixels(device, plan.pixel, b, view, rows, outputs);
+                 KdRenderLaunch launch, LaunchRows rows) {
+    launch.first_row = kd_u32(rows.first);
+    launch.rows = kd_u32(rows.count);
+    if (plan.choice.packets) launch_camera_packets(device, plan.packet, b, launch);
+    if (plan.choice.shadow_packets) launch_shadow_packets(device, plan.shadow, b, launch);
+    launch_pixels(device, plan.pixel, b, launch);
 }
 
 }  // namespace
@@ -189,12 +201,13 @@ void warm_up_opencl_render(ClDevice& device, OpenClRenderPlan& plan) {
     // compiles each kernel for the tile size it will run with (PoCL: seconds with a cold cache),
     // so its time is compilation.
     const auto start = std::chrono::steady_clock::now();
-    const KdView view{};
     with_cl_context("preparing the render kernel on " + device.info().name, [&] {
         const cl::Buffer dummy = device.allocate(sizeof(KdHit), "render kernel warm-up buffer");
-        const RenderBuffers buffers{dummy, dummy, dummy, dummy, dummy, dummy, dummy, dummy, dummy,
-                                    dummy, dummy, dummy, dummy, dummy, dummy, dummy, dummy, dummy};
-        launch_rows(device, plan, buffers, view, {0, 1}, 0);
+        RenderBuffers buffers;
+        buffers.nodes = buffers.leaf_indices = buffers.triangles = buffers.scene_data = dummy;
+        buffers.rgb = buffers.hits = buffers.normals = buffers.counts = dummy;
+        buffers.traced = buffers.occluded = dummy;
+        launch_rows(device, plan, buffers, KdRenderLaunch{}, {0, 1});
         device.queue().finish();
     });
     add_compile_ms(
@@ -209,8 +222,6 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
     const std::size_t pixels = std::size_t(view.width) * view.height;
     const bool packets = plan.choice.packets, shadow_packets = plan.choice.shadow_packets;
 
-    const std::vector<float> bounds = {tree.bounds.lo.x, tree.bounds.lo.y, tree.bounds.lo.z,
-                                       tree.bounds.hi.x, tree.bounds.hi.y, tree.bounds.hi.z};
     // The builder's buffers where it hands them over (a copy each way less per frame: 12 MB for
     // the BART Kitchen, over PCIe on a GPU), else the host's arrays uploaded.
     const bool built_here =
@@ -224,18 +235,10 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
     b.leaf_indices = built_here ? on_device->leaf_indices
                                 : upload(device, tree.leaf_indices, "leaf triangle indices");
     b.triangles = built_here ? on_device->triangles : upload(device, scene.triangles, "triangles");
-    b.material_ids = upload(device, scene.material_ids, "material ids");
-    b.has_vertex_normals = scene.has_vertex_normals();
-    b.vertex_normals =
-        b.has_vertex_normals ? upload(device, scene.vertex_normals, "vertex normals") : b.triangles;
-    b.materials = upload(device, inputs.materials, "materials");
-    b.lights = upload(device, inputs.lights, "lights");
-    b.emitters = upload(device, inputs.emitters, "emitter table");
-    const bool textured = inputs.effects.textures;
-    b.texcoords = textured ? upload(device, scene.texcoords, "texture coordinates") : b.emitters;
-    b.textures = textured ? upload(device, scene.texture_table, "texture table") : b.emitters;
-    b.texels = textured ? upload(device, scene.texels, "texel atlas") : b.emitters;
-    b.bounds = upload(device, bounds, "scene bounds");
+    // The scene and the inputs outlive the frame's q.finish() below, which the uploads need.
+    DeviceSceneArrays arrays = upload_scene_arrays(device, frame_scene_arrays(scene, inputs));
+    b.scene_data = std::move(arrays.buffer);
+    b.layout = arrays.layout;
     b.rgb = device.allocate(pixels * 3 * sizeof(float), "image");
     b.hits = device.allocate(pixels * sizeof(KdHit), "hit buffer");
     b.normals = device.allocate(inputs.normals ? pixels * 3 * sizeof(float) : 1, "normal buffer");
@@ -251,10 +254,11 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
     const kd_u32 outputs = (packets ? KDRAY_RENDER_TRACED_PRIMARY : 0u) |
                            (shadow_packets ? KDRAY_RENDER_TRACED_SHADOWS : 0u) |
                            (inputs.normals ? KDRAY_RENDER_NORMALS : 0u);
+    const KdRenderLaunch launch = frame_launch(view, tree.bounds, outputs);
     with_cl_context("rendering a frame on " + device.info().name, [&] {
         for (std::size_t row = 0; row < view.height; row += step)
-            launch_rows(device, plan, b, view,
-                        {row, std::min<std::size_t>(step, view.height - row)}, outputs);
+            launch_rows(device, plan, b, launch,
+                        {row, std::min<std::size_t>(step, view.height - row)});
     });
 
     FrameResult frame;

@@ -10,34 +10,36 @@
  *   kd_render_pixels         one work-item per pixel: its samples, shaded; the primary hits come
  *                            from that buffer when there is one, else they are traced here
  *   kd_shade_traced_pixels   one work-item per pixel of one sample whose hit is in that buffer,
- *                            shaded where no reflection or refraction follows */
+ *                            shaded where no reflection or refraction follows
+ *
+ * Every kernel takes the tree's buffers (nodes, leaf_indices, triangles) first and a
+ * KdRenderLaunch record (core/kd_shared.h: the view, the tree's box, the launch's rows and
+ * outputs); those that shade also take the frame's read-only arrays in one buffer, scene_data,
+ * with the KdSceneLayout record of where each lies; then the buffers the kernel writes. */
 #include "cl/render/kernels/packet_traverse.cl"
 #include "core/kd_render.h"
 
-/* The scene view the kernels read; vertex_normals is read only when has_vertex_normals (a
- * kernel argument cannot be a null buffer in OpenCL 1.2). */
+/* The scene view the kernels read: the tree's buffers, the launch's box, and the frame's arrays
+ * at their byte offsets in scene_data. vertex_normals is 0 where the scene has none (flat
+ * shading). */
 inline KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
-                                 __global const float* triangles,
-                                 __global const float* vertex_normals, kd_u32 has_vertex_normals,
-                                 __global const kd_u32* material_ids,
-                                 __global const KdMaterial* materials,
-                                 __global const KdLight* lights, __global const KdEmitter* emitters,
-                                 __global const float* texcoords,
-                                 __global const KdTexture* textures, __global const float* texels,
-                                 __global const float* bounds) {
+                                 __global const float* triangles, __global const uchar* scene_data,
+                                 const KdSceneLayout* layout, const KdRenderLaunch* launch) {
     KdSceneView scene;
     scene.nodes = nodes;
     scene.leaf_indices = leaf_indices;
     scene.triangles = triangles;
-    scene.vertex_normals = has_vertex_normals ? vertex_normals : 0;
-    scene.material_ids = material_ids;
-    scene.materials = materials;
-    scene.lights = lights;
-    scene.emitters = emitters;
-    scene.texcoords = texcoords;
-    scene.textures = textures;
-    scene.texels = texels;
-    for (int i = 0; i < 6; ++i) scene.bounds[i] = bounds[i];
+    scene.vertex_normals = layout->has_vertex_normals
+                               ? (__global const float*)(scene_data + layout->vertex_normals)
+                               : 0;
+    scene.material_ids = (__global const kd_u32*)(scene_data + layout->material_ids);
+    scene.materials = (__global const KdMaterial*)(scene_data + layout->materials);
+    scene.lights = (__global const KdLight*)(scene_data + layout->lights);
+    scene.emitters = (__global const KdEmitter*)(scene_data + layout->emitters);
+    scene.texcoords = (__global const float*)(scene_data + layout->texcoords);
+    scene.textures = (__global const KdTexture*)(scene_data + layout->textures);
+    scene.texels = (__global const float*)(scene_data + layout->texels);
+    for (int i = 0; i < 6; ++i) scene.bounds[i] = launch->bounds[i];
     scene.intersect = KDRAY_COMPILED_INTERSECT;
     return scene;
 }
@@ -77,25 +79,26 @@ inline KdPacketRays kd_primary_packet(const KdView* view, uint16 x, uint16 y, kd
 }
 
 /* Work-item (tile x, tile y, primary ray r) traces ray r (kd_primary_ray) of the tile's pixels,
- * rows first_row.. first_row + rows of the image, into hits[r * rows * width + pixel], pixel
- * counted from first_row. */
+ * rows first_row.. first_row + rows of the image (the launch's), into
+ * hits[r * rows * width + pixel], pixel counted from first_row. */
 __kernel void kd_trace_camera_packets(__global const KdNode* nodes,
                                       __global const kd_u32* leaf_indices,
-                                      __global const float* triangles, __global const float* bounds,
-                                      const KdView view, const kd_u32 first_row, const kd_u32 rows,
+                                      __global const float* triangles, const KdRenderLaunch launch,
                                       __global KdHit* hits) {
     const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE;
     const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE;
     const kd_u32 r = (kd_u32)get_global_id(2);
-    if (x0 >= view.width || row0 >= rows || r >= kd_primary_rays_per_pixel(&view)) return;
-    const KdView v = view;
+    const kd_u32 rows = launch.rows;
+    if (x0 >= launch.view.width || row0 >= rows || r >= kd_primary_rays_per_pixel(&launch.view))
+        return;
+    const KdView v = launch.view;
     float box[6];
-    for (int i = 0; i < 6; ++i) box[i] = bounds[i];
+    for (int i = 0; i < 6; ++i) box[i] = launch.bounds[i];
     /* Lane i: pixel (x0 + i % 4, row0 + i / 4) of the tile. */
     const uint16 lane = (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     const uint16 x = x0 + lane % KDRAY_PACKET_TILE, row = row0 + lane / KDRAY_PACKET_TILE;
     const int16 valid = (x < v.width) & (row < rows);
-    const KdPacketRays rays = kd_primary_packet(&v, x, first_row + row, r, valid);
+    const KdPacketRays rays = kd_primary_packet(&v, x, launch.first_row + row, r, valid);
     KdHit out[KDRAY_PACKET_SIZE];
     kd_trace_packet(nodes, leaf_indices, triangles, box, &rays, 0, out);
     __global KdHit* plane = hits + (size_t)r * rows * v.width;
@@ -113,25 +116,24 @@ __kernel void kd_trace_camera_packets(__global const KdNode* nodes,
  * lane's shadow ray is the one kd_direct_light casts (the same shared functions), and its any-hit
  * walk finds it blocked exactly when kd_trace_occluded does. Bits of rays kd_direct_light will
  * not cast (a light behind the surface) stay 0 and are never read. At most
- * KDRAY_PACKET_SHADOW_LIGHTS lights. Its first arguments are kd_trace_camera_packets', so one
- * launch helper serves both. */
+ * KDRAY_PACKET_SHADOW_LIGHTS lights. */
 __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
                                       __global const kd_u32* leaf_indices,
-                                      __global const float* triangles, __global const float* bounds,
-                                      const KdView view, const kd_u32 first_row, const kd_u32 rows,
-                                      __global const KdLight* lights, __global const KdHit* traced,
-                                      __global kd_u32* occluded,
-                                      __global const float* vertex_normals,
-                                      const kd_u32 has_vertex_normals) {
+                                      __global const float* triangles,
+                                      __global const uchar* scene_data, const KdSceneLayout layout,
+                                      const KdRenderLaunch launch, __global const KdHit* traced,
+                                      __global kd_u32* occluded) {
     const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE;
     const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE;
     const kd_u32 r = (kd_u32)get_global_id(2);
-    if (x0 >= view.width || row0 >= rows || r >= kd_primary_rays_per_pixel(&view)) return;
+    const kd_u32 first_row = launch.first_row, rows = launch.rows;
+    if (x0 >= launch.view.width || row0 >= rows || r >= kd_primary_rays_per_pixel(&launch.view))
+        return;
     /* With spp > 1, ray spp is the AOV's centre ray, which nothing shades. */
-    if (view.spp > 1u && r == view.spp) return;
-    const KdView v = view;
-    const KdSceneView scene = kd_scene_view(nodes, leaf_indices, triangles, vertex_normals,
-                                            has_vertex_normals, 0, 0, lights, 0, 0, 0, 0, bounds);
+    if (launch.view.spp > 1u && r == launch.view.spp) return;
+    const KdView v = launch.view;
+    const KdSceneView scene =
+        kd_scene_view(nodes, leaf_indices, triangles, scene_data, &layout, &launch);
     /* Per lane (pixel (x0 + i % 4, row0 + i / 4)): its hit's point and geometric and shading
      * normals, as kd_trace_sample computes them. */
     kd_f32 p[KDRAY_PACKET_SIZE][3], ng[KDRAY_PACKET_SIZE][3], ns[KDRAY_PACKET_SIZE][3];
@@ -156,7 +158,7 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
         has_hit[i] = 1;
     }
     float box[6];
-    for (int i = 0; i < 6; ++i) box[i] = bounds[i];
+    for (int i = 0; i < 6; ++i) box[i] = launch.bounds[i];
     const kd_u32 light_count = kd_shining_lights(&v);
     for (kd_u32 light = 0; light < light_count; ++light) {
         float org[3][KDRAY_PACKET_SIZE], dir[3][KDRAY_PACKET_SIZE], tmax[KDRAY_PACKET_SIZE];
@@ -204,21 +206,18 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
  * no primary walk and no pending-ray stack. */
 KDRAY_HOT_INLINE void kd_pixel_work_item(
     __global const KdNode* nodes, __global const kd_u32* leaf_indices,
-    __global const float* triangles, __global const kd_u32* material_ids,
-    __global const KdMaterial* materials, __global const KdLight* lights,
-    __global const KdEmitter* emitters, __global const float* texcoords,
-    __global const KdTexture* textures, __global const float* texels, __global const float* bounds,
-    const KdView* view, const kd_u32 first_row, const kd_u32 rows, __global float* rgb,
-    __global KdHit* hits, __global float* normals, __global KdRayCounts* ray_counts,
-    __global const KdHit* traced, __global const kd_u32* occluded, const kd_u32 outputs,
-    __global const float* vertex_normals, const kd_u32 has_vertex_normals, const int direct_only) {
+    __global const float* triangles, __global const uchar* scene_data, const KdSceneLayout* layout,
+    const KdRenderLaunch* launch, __global float* rgb, __global KdHit* hits,
+    __global float* normals, __global KdRayCounts* ray_counts, __global const KdHit* traced,
+    __global const kd_u32* occluded, const int direct_only) {
+    const KdView* view = &launch->view;
+    const kd_u32 rows = launch->rows, outputs = launch->outputs;
     const kd_u32 x = (kd_u32)get_global_id(0);
     const kd_u32 row = (kd_u32)get_global_id(1);
     if (x >= view->width || row >= rows) return;
-    const kd_u32 y = first_row + row;
-    const KdSceneView scene = kd_scene_view(nodes, leaf_indices, triangles, vertex_normals,
-                                            has_vertex_normals, material_ids, materials, lights,
-                                            emitters, texcoords, textures, texels, bounds);
+    const kd_u32 y = launch->first_row + row;
+    const KdSceneView scene =
+        kd_scene_view(nodes, leaf_indices, triangles, scene_data, layout, launch);
     const size_t in_launch = (size_t)row * view->width + x;
     __global const kd_u32* blocked =
         (outputs & KDRAY_RENDER_TRACED_SHADOWS) ? occluded + in_launch : 0;
@@ -244,43 +243,33 @@ KDRAY_HOT_INLINE void kd_pixel_work_item(
 #endif
 }
 
-/* One pixel per work-item; outputs: KDRAY_RENDER_* bits. With KDRAY_RENDER_TRACED_PRIMARY the
- * primary rays' hits are in traced (as kd_trace_camera_packets writes them), else every ray is
- * traced here. */
+/* One pixel per work-item; launch.outputs: KDRAY_RENDER_* bits. With KDRAY_RENDER_TRACED_PRIMARY
+ * the primary rays' hits are in traced (as kd_trace_camera_packets writes them), else every ray
+ * is traced here. */
 __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
-                               __global const float* triangles, __global const kd_u32* material_ids,
-                               __global const KdMaterial* materials, __global const KdLight* lights,
-                               __global const KdEmitter* emitters, __global const float* texcoords,
-                               __global const KdTexture* textures, __global const float* texels,
-                               __global const float* bounds, const KdView view,
-                               const kd_u32 first_row, const kd_u32 rows, __global float* rgb,
-                               __global KdHit* hits, __global float* normals,
+                               __global const float* triangles, __global const uchar* scene_data,
+                               const KdSceneLayout layout, const KdRenderLaunch launch,
+                               __global float* rgb, __global KdHit* hits, __global float* normals,
                                __global KdRayCounts* ray_counts, __global const KdHit* traced,
-                               __global const kd_u32* occluded, const kd_u32 outputs,
-                               __global const float* vertex_normals,
-                               const kd_u32 has_vertex_normals) {
-    const KdView v = view;
-    kd_pixel_work_item(nodes, leaf_indices, triangles, material_ids, materials, lights, emitters,
-                       texcoords, textures, texels, bounds, &v, first_row, rows, rgb, hits, normals,
-                       ray_counts, traced, occluded, outputs, vertex_normals, has_vertex_normals,
-                       0);
+                               __global const kd_u32* occluded) {
+    const KdSceneLayout own_layout = layout;
+    const KdRenderLaunch own_launch = launch;
+    kd_pixel_work_item(nodes, leaf_indices, triangles, scene_data, &own_layout, &own_launch, rgb,
+                       hits, normals, ray_counts, traced, occluded, 0);
 }
 
 /* kd_render_pixels for spp 1 with the primary hits traced, in a kernel without reflection and
  * refraction: kd_render_pixel's one sample and its shading, nothing else. */
-__kernel void kd_shade_traced_pixels(
-    __global const KdNode* nodes, __global const kd_u32* leaf_indices,
-    __global const float* triangles, __global const kd_u32* material_ids,
-    __global const KdMaterial* materials, __global const KdLight* lights,
-    __global const KdEmitter* emitters, __global const float* texcoords,
-    __global const KdTexture* textures, __global const float* texels, __global const float* bounds,
-    const KdView view, const kd_u32 first_row, const kd_u32 rows, __global float* rgb,
-    __global KdHit* hits, __global float* normals, __global KdRayCounts* ray_counts,
-    __global const KdHit* traced, __global const kd_u32* occluded, const kd_u32 outputs,
-    __global const float* vertex_normals, const kd_u32 has_vertex_normals) {
-    const KdView v = view;
-    kd_pixel_work_item(nodes, leaf_indices, triangles, material_ids, materials, lights, emitters,
-                       texcoords, textures, texels, bounds, &v, first_row, rows, rgb, hits, normals,
-                       ray_counts, traced, occluded, outputs, vertex_normals, has_vertex_normals,
-                       1);
+__kernel void kd_shade_traced_pixels(__global const KdNode* nodes,
+                                     __global const kd_u32* leaf_indices,
+                                     __global const float* triangles,
+                                     __global const uchar* scene_data, const KdSceneLayout layout,
+                                     const KdRenderLaunch launch, __global float* rgb,
+                                     __global KdHit* hits, __global float* normals,
+                                     __global KdRayCounts* ray_counts, __global const KdHit* traced,
+                                     __global const kd_u32* occluded) {
+    const KdSceneLayout own_layout = layout;
+    const KdRenderLaunch own_launch = launch;
+    kd_pixel_work_item(nodes, leaf_indices, triangles, scene_data, &own_layout, &own_launch, rgb,
+                       hits, normals, ray_counts, traced, occluded, 1);
 }

@@ -3,13 +3,14 @@
  * shared safely while both compilers lay the structs out alike. out[0] = number of entries, then
  * one sizeof each, in the order KdNode, KdRay, KdHit, KdMaterial, KdLight, KdView, KdRayCounts,
  * KdBuildBox, KdBuildNode, KdSmallNode, KdLargeNode, KdLargeSplit, KdLargeCuts, KdSmallRoot,
- * KdLargeSplitArgs, KdLargeLevelArgs, KdSmallBatchArgs, KdEmitter, KdTexture, KdSmallLevelNode. */
+ * KdLargeSplitArgs, KdLargeLevelArgs, KdSmallBatchArgs, KdEmitter, KdTexture, KdSmallLevelNode,
+ * KdSceneLayout, KdRenderLaunch. */
 #include "core/kd_build_shared.h"
 #include "core/kd_shared.h"
 
 __kernel void kd_report_layout(__global uint* out) {
     if (get_global_id(0) != 0) return;
-    out[0] = 20;
+    out[0] = 22;
     out[1] = sizeof(KdNode);
     out[2] = sizeof(KdRay);
     out[3] = sizeof(KdHit);
@@ -30,4 +31,6 @@ __kernel void kd_report_layout(__global uint* out) {
     out[18] = sizeof(KdEmitter);
     out[19] = sizeof(KdTexture);
     out[20] = sizeof(KdSmallLevelNode);
+    out[21] = sizeof(KdSceneLayout);
+    out[22] = sizeof(KdRenderLaunch);
 }
