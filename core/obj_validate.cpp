@@ -169,6 +169,7 @@ class ObjScanner {
             return;
         }
         if (keyword == "mtllib") return scan_mtllib(p, e);
+        if (keyword == "vw") return scan_vertex_weights(p, e);
         if (!is_known_statement(keyword)) fail("unknown statement '" + printable(keyword) + "'");
     }
 
@@ -196,6 +197,29 @@ class ObjScanner {
         if (count != 3)
             fail("normal has " + std::to_string(count) + " numbers; expected 'vn x y z'");
         ++result_.normals;
+    }
+
+    /// `vw vertex joint weight joint weight ...`, tinyobjloader's skinning extension, which kdray
+    /// ignores but tinyobjloader parses: it converts each joint id to int, so a joint of 1e127
+    /// (inf as its float) is undefined behaviour there (UBSan stopped fuzz_obj on it). Joints must
+    /// be whole numbers from 0 to 2^31 - 1 and weights finite; the vertex is an int.
+    void scan_vertex_weights(const char* p, const char* e) {
+        const std::string_view vertex = next_token(p, e);
+        int vertex_id = 0;
+        const char* const last = vertex.data() + vertex.size();
+        auto [ptr, ec] = std::from_chars(vertex.data(), last, vertex_id);
+        if (vertex.empty() || ec != std::errc() || ptr != last)
+            fail("vertex weight line's vertex '" + printable(vertex) +
+                 "' is not an integer of 32 bits");
+        int count = 0;
+        for (std::string_view token; !(token = next_token(p, e)).empty(); ++count) {
+            double value = 0;
+            check_number(token, count % 2 == 0 ? "joint id" : "joint weight", &value);
+            // 2147483520 is the largest float below 2^31: tinyobjloader holds the id as a float.
+            if (count % 2 == 0 && (value < 0 || value > 2147483520.0 || value != std::floor(value)))
+                fail("joint id '" + printable(token) + "' is not a whole number from 0 to 2^31");
+        }
+        if (count % 2 != 0) fail("vertex weight line has a joint without a weight");
     }
 
     /// A number of a `v` or `vn` line (`what` names it in the error): finite as a 32-bit float,

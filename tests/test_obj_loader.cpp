@@ -105,7 +105,7 @@ TEST_CASE("large polygons load within a budget of triangulation work, past it fa
         }
         for (int f = 0; f < faces; ++f) {
             text += "f";
-            for (int k = 1; k <= n; ++k) text += " " + std::to_string(k);
+            for (int k = 1; k <= n; ++k) (text += ' ') += std::to_string(k);
             text += "\n";
         }
         return text;
@@ -333,6 +333,19 @@ TEST_CASE("inputs found by fuzzing (tests/fuzz) fail with their line") {
     // 400 digits and then e-399 is 1.0, but tinyobjloader's mantissa is already inf.
     CHECK(load_error("v 1" + std::string(399, '0') + "e-399 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
               .find("is longer than the 64 characters kdray reads") != std::string::npos);
+    // A `vw` (skin weight) joint id of 1e127 is inf as tinyobjloader's float, and tinyobjloader
+    // converts it to int: undefined behaviour (fuzz_obj). The pre-scan checks joints and weights.
+    CHECK(load_error(tri + "vw 0 1" + std::string(127, '1') + " 0.5\nf 1 2 3\n")
+              .find("bad.obj:4: joint id '1111") != std::string::npos);
+    CHECK(load_error(tri + "vw 0 -1 0.5\nf 1 2 3\n").find("bad.obj:4: joint id '-1'") !=
+          std::string::npos);
+    CHECK(load_error(tri + "vw 0 1 nan\nf 1 2 3\n").find("bad.obj:4: joint weight 'nan'") !=
+          std::string::npos);
+    CHECK(load_error(tri + "vw 0 1\nf 1 2 3\n")
+              .find("bad.obj:4: vertex weight line has a joint "
+                    "without a weight") != std::string::npos);
+    // Well-formed skin weights are accepted and ignored.
+    CHECK(load_error(tri + "vw 0 0 0.25 1 0.75\nf 1 2 3\n").empty());
 }
 
 TEST_CASE("MTL numbers are read as tinyobjloader reads them") {
