@@ -252,10 +252,8 @@ __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u
                                __global float* rgb, __global KdHit* hits, __global float* normals,
                                __global KdRayCounts* ray_counts, __global const KdHit* traced,
                                __global const kd_u32* occluded) {
-    const KdSceneLayout own_layout = layout;
-    const KdRenderLaunch own_launch = launch;
-    kd_pixel_work_item(nodes, leaf_indices, triangles, scene_data, &own_layout, &own_launch, rgb,
-                       hits, normals, ray_counts, traced, occluded, 0);
+    kd_pixel_work_item(nodes, leaf_indices, triangles, scene_data, &layout, &launch, rgb, hits,
+                       normals, ray_counts, traced, occluded, 0);
 }
 
 /* kd_render_pixels for spp 1 with the primary hits traced, in a kernel without reflection and
@@ -268,8 +266,6 @@ __kernel void kd_shade_traced_pixels(__global const KdNode* nodes,
                                      __global KdHit* hits, __global float* normals,
                                      __global KdRayCounts* ray_counts, __global const KdHit* traced,
                                      __global const kd_u32* occluded) {
-    const KdSceneLayout own_layout = layout;
-    const KdRenderLaunch own_launch = launch;
-    kd_pixel_work_item(nodes, leaf_indices, triangles, scene_data, &own_layout, &own_launch, rgb,
-                       hits, normals, ray_counts, traced, occluded, 1);
+    kd_pixel_work_item(nodes, leaf_indices, triangles, scene_data, &layout, &launch, rgb, hits,
+                       normals, ray_counts, traced, occluded, 1);
 }
