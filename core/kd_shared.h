@@ -25,21 +25,34 @@
 #define KDRAY_DEVICE_CODE 1
 #endif
 
+/* Every device helper is KDRAY_INLINE: `static inline` in OpenCL C. A plain `inline` there has
+ * C99's meaning, an inline definition that needs an external one elsewhere whenever the compiler
+ * keeps a call; none exists, so a compiler that inlines less (NVIDIA's driver, clang for
+ * nvptx64 at -O2, anything at -cl-opt-disable) failed to link the program (kd_price_candidates,
+ * kd_clip_node_table, kd_group_clip_table were left unresolved). `static` gives each helper
+ * internal linkage: a kept call goes to the program's own copy. On the host it is C++'s
+ * `inline`. */
+#if defined(__OPENCL_C_VERSION__) || defined(__OPENCL_VERSION__)
+#define KDRAY_INLINE_LINKAGE static inline
+#else
+#define KDRAY_INLINE_LINKAGE inline
+#endif
+
 /* Functions whose inlining a kernel's speed depends on: PoCL (LLVM at -O2) left the walk, the
  * triangle test, kd_trace_sample and the builder's triangle clipping as calls, which keeps their
  * callers' constants in memory behind pointers (and, for a box passed by value, made a stalled
  * store-to-load copy per call). Compilers without the attribute get plain inline. */
 #if defined(__clang__) || defined(__GNUC__)
-#define KDRAY_HOT_INLINE inline __attribute__((always_inline))
+#define KDRAY_HOT_INLINE KDRAY_INLINE_LINKAGE __attribute__((always_inline))
 #else
-#define KDRAY_HOT_INLINE inline
+#define KDRAY_HOT_INLINE KDRAY_INLINE_LINKAGE
 #endif
 
 #ifdef KDRAY_DEVICE_CODE
 typedef uint kd_u32;
 typedef int kd_i32;
 typedef float kd_f32;
-#define KDRAY_INLINE inline
+#define KDRAY_INLINE KDRAY_INLINE_LINKAGE
 #define KDRAY_AS_FLOAT(u) as_float(u)
 #define KDRAY_AS_UINT(f) as_uint(f)
 #else
@@ -49,7 +62,7 @@ typedef float kd_f32;
 typedef std::uint32_t kd_u32;
 typedef std::int32_t kd_i32;
 typedef float kd_f32;
-#define KDRAY_INLINE inline
+#define KDRAY_INLINE KDRAY_INLINE_LINKAGE
 #define KDRAY_AS_FLOAT(u) std::bit_cast<float>(static_cast<kd_u32>(u))
 #define KDRAY_AS_UINT(f) std::bit_cast<kd_u32>(static_cast<float>(f))
 #endif

@@ -20,16 +20,16 @@ typedef struct KdBox {
     float3 lo, hi;
 } KdBox;
 
-inline float kd_axis_of(float3 v, uint axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+KDRAY_INLINE float kd_axis_of(float3 v, uint axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
 
-inline float3 kd_with_axis(float3 v, uint axis, float x) {
+KDRAY_INLINE float3 kd_with_axis(float3 v, uint axis, float x) {
     if (axis == 0) v.x = x;
     else if (axis == 1) v.y = x;
     else v.z = x;
     return v;
 }
 
-inline KdBox kd_load_box(__global const float* boxes, size_t i) {
+KDRAY_INLINE KdBox kd_load_box(__global const float* boxes, size_t i) {
     __global const float* b = boxes + i * KDRAY_BOX_FLOATS;
     KdBox box;
     box.lo = (float3)(b[0], b[1], b[2]);
@@ -37,34 +37,34 @@ inline KdBox kd_load_box(__global const float* boxes, size_t i) {
     return box;
 }
 
-inline void kd_store_box(__global float* boxes, size_t i, KdBox box) {
+KDRAY_INLINE void kd_store_box(__global float* boxes, size_t i, KdBox box) {
     __global float* b = boxes + i * KDRAY_BOX_FLOATS;
     b[0] = box.lo.x, b[1] = box.lo.y, b[2] = box.lo.z;
     b[3] = box.hi.x, b[4] = box.hi.y, b[5] = box.hi.z;
 }
 
 /* A box of a shared record (KdLargeNode, KdSmallRoot) as a KdBox, and back. */
-inline KdBox kd_box_of(KdBuildBox b) {
+KDRAY_INLINE KdBox kd_box_of(KdBuildBox b) {
     KdBox box;
     box.lo = (float3)(b.lo[0], b.lo[1], b.lo[2]);
     box.hi = (float3)(b.hi[0], b.hi[1], b.hi[2]);
     return box;
 }
 
-inline KdBuildBox kd_build_box_of(KdBox box) {
+KDRAY_INLINE KdBuildBox kd_build_box_of(KdBox box) {
     KdBuildBox b;
     b.lo[0] = box.lo.x, b.lo[1] = box.lo.y, b.lo[2] = box.lo.z;
     b.hi[0] = box.hi.x, b.hi[1] = box.hi.y, b.hi[2] = box.hi.z;
     return b;
 }
 
-inline float kd_box_area(KdBox b) {
+KDRAY_INLINE float kd_box_area(KdBox b) {
     const float3 e = fmax(b.hi - b.lo, (float3)(0.0f));
     return 2.0f * (e.x * e.y + e.y * e.z + e.z * e.x);
 }
 
 /* The box of one side of a split: below keeps [lo, split], above [split, hi] on the axis. */
-inline KdBox kd_child_box(KdBox b, uint axis, float split, uint side) {
+KDRAY_INLINE KdBox kd_child_box(KdBox b, uint axis, float split, uint side) {
     if (side == 0) b.hi = kd_with_axis(b.hi, axis, split);
     else b.lo = kd_with_axis(b.lo, axis, split);
     return b;
@@ -77,7 +77,7 @@ inline KdBox kd_child_box(KdBox b, uint axis, float split, uint side) {
  * side only, `planar_sides` (below for a median or SAH split, the kept side for an empty-space
  * cut): a ray that meets it crosses or lies in the plane, so the walk visits both children anyway,
  * and copying it to both would double every face of an axis-aligned model at every split. */
-inline uint kd_classify(float lo, float hi, float split, uint planar_sides) {
+KDRAY_INLINE uint kd_classify(float lo, float hi, float split, uint planar_sides) {
     uint sides = 0;
     if (lo < split) sides |= KDRAY_BELOW;
     if (hi > split) sides |= KDRAY_ABOVE;
@@ -135,7 +135,7 @@ typedef struct KdTrianglePlane {
     float normal_error;
 } KdTrianglePlane;
 
-inline KdTrianglePlane kd_triangle_plane(__global const float* tri) {
+KDRAY_INLINE KdTrianglePlane kd_triangle_plane(__global const float* tri) {
     KdTrianglePlane p;
     p.corner = (float3)(tri[0], tri[1], tri[2]);
     const float3 e1 = (float3)(tri[3], tri[4], tri[5]) - p.corner;
@@ -148,7 +148,7 @@ inline KdTrianglePlane kd_triangle_plane(__global const float* tri) {
 /* Whether a triangle's plane misses the box: its corners all lie on one side of it (the normal's
  * test of Akenine-Moller's triangle-box overlap), by more than the rounding of the normal, which
  * a sliver or a collapsed triangle makes as large as the normal itself. */
-inline int kd_plane_misses_box(const KdTrianglePlane* p, KdBox box) {
+KDRAY_INLINE int kd_plane_misses_box(const KdTrianglePlane* p, KdBox box) {
     const float3 centre = 0.5f * (box.lo + box.hi), half_extent = 0.5f * (box.hi - box.lo);
     const float3 to_centre = centre - p->corner;
     const float distance = dot(p->normal, to_centre), radius = dot(fabs(p->normal), half_extent);
@@ -160,10 +160,10 @@ inline int kd_plane_misses_box(const KdTrianglePlane* p, KdBox box) {
 }
 
 /* The index of the lowest set bit of a mask of a small root's references (bits != 0). */
-inline uint kd_lowest_bit(ulong bits) { return (uint)popcount((bits & (0ul - bits)) - 1ul); }
+KDRAY_INLINE uint kd_lowest_bit(ulong bits) { return (uint)popcount((bits & (0ul - bits)) - 1ul); }
 
 /* Index of the last of the n ascending `starts` that is <= x: the segment holding element x. */
-inline uint kd_find_segment(__global const uint* starts, uint n, uint x) {
+KDRAY_INLINE uint kd_find_segment(__global const uint* starts, uint n, uint x) {
     uint lo = 0, hi = n;
     while (hi - lo > 1) {
         const uint mid = (lo + hi) / 2;
@@ -173,7 +173,7 @@ inline uint kd_find_segment(__global const uint* starts, uint n, uint x) {
     return lo;
 }
 
-inline KdBuildNode kd_build_leaf(uint count, uint first) {
+KDRAY_INLINE KdBuildNode kd_build_leaf(uint count, uint first) {
     KdBuildNode n;
     n.axis = KDRAY_LEAF_AXIS;
     n.split = 0.0f;
@@ -185,13 +185,13 @@ inline KdBuildNode kd_build_leaf(uint count, uint first) {
 }
 
 /* The record of a small root (§4.2): its subtree is the small stage's, in the records below. */
-inline KdBuildNode kd_build_small_root(uint root) {
+KDRAY_INLINE KdBuildNode kd_build_small_root(uint root) {
     KdBuildNode n = kd_build_leaf(0, root);
     n.axis = KDRAY_SMALL_ROOT_AXIS;
     return n;
 }
 
-inline KdBuildNode kd_build_inner(uint axis, float split, uint below, uint above) {
+KDRAY_INLINE KdBuildNode kd_build_inner(uint axis, float split, uint below, uint above) {
     KdBuildNode n;
     n.axis = axis;
     n.split = split;
@@ -205,7 +205,7 @@ inline KdBuildNode kd_build_inner(uint axis, float split, uint below, uint above
 /* Small-stage records (KdSmallNode): an inner node, whose above child's index its subtree's
  * builder fills in later, and a leaf of `count` triangles, the set bits of `mask`, whose
  * references start at `first` (counted from the subtree's first). */
-inline KdSmallNode kd_small_inner(uint axis, float split) {
+KDRAY_INLINE KdSmallNode kd_small_inner(uint axis, float split) {
     KdSmallNode n;
     n.axis_and_offset = axis;
     n.split_or_count = as_uint(split);
@@ -214,7 +214,7 @@ inline KdSmallNode kd_small_inner(uint axis, float split) {
     return n;
 }
 
-inline KdSmallNode kd_small_leaf(uint first, uint count, ulong mask) {
+KDRAY_INLINE KdSmallNode kd_small_leaf(uint first, uint count, ulong mask) {
     KdSmallNode n;
     n.axis_and_offset = KDRAY_LEAF_AXIS | (first << 2);
     n.split_or_count = count;
@@ -227,7 +227,7 @@ inline KdSmallNode kd_small_leaf(uint first, uint count, ulong mask) {
  * reference go: the below child right after its parent, the above child after the below child's
  * subtree (subtree_nodes and subtree_refs: each subtree's node and leaf reference counts). The one
  * rule of the output stage and of the per-level small stage. */
-inline void kd_place_children(uint id, uint below, uint above, __global const uint* subtree_nodes,
+KDRAY_INLINE void kd_place_children(uint id, uint below, uint above, __global const uint* subtree_nodes,
                               __global const uint* subtree_refs, __global uint* position,
                               __global uint* leaf_position) {
     position[below] = position[id] + 1;

@@ -250,10 +250,10 @@ __kernel void kd_classify_chunks(KdLargeLevelArgs a, __global const uint* node_r
 
 /* Value of slot `s` of kind `k` and its rank among the level's slots of that kind, from the
  * in-place scanned slot array (slots = 2 * nodes per kind). */
-inline uint kd_slot_value(__global const uint* slot_rank, uint slots, uint k, uint s) {
+KDRAY_INLINE uint kd_slot_value(__global const uint* slot_rank, uint slots, uint k, uint s) {
     return slot_rank[k * slots + s + 1] - slot_rank[k * slots + s];
 }
-inline uint kd_slot_rank(__global const uint* slot_rank, uint slots, uint k, uint s) {
+KDRAY_INLINE uint kd_slot_rank(__global const uint* slot_rank, uint slots, uint k, uint s) {
     return slot_rank[k * slots + s] - slot_rank[k * slots];
 }
 

@@ -26,7 +26,7 @@
  * to bin b - 1 (not above it), the bin of the float just before it. Conversions saturate, so
  * values before the box fall in bin 0; vector conversions, not floor and ceil, which PoCL left
  * as branchy scalar code (the kernel then took 40% of a Kitchen build). */
-inline void kd_large_bins(KdBox b, float4 lo, float4 scale, uint4* lo_bin, uint4* hi_bin) {
+KDRAY_INLINE void kd_large_bins(KdBox b, float4 lo, float4 scale, uint4* lo_bin, uint4* hi_bin) {
     const uint4 last = (uint4)(KDRAY_LARGE_BINS - 1);
     const float4 f_lo = ((float4)(b.lo, 0.0f) - lo) * scale;
     const float4 f_hi = ((float4)(b.hi, 0.0f) - lo) * scale;
@@ -36,7 +36,7 @@ inline void kd_large_bins(KdBox b, float4 lo, float4 scale, uint4* lo_bin, uint4
 }
 
 /* The tight box a node's bins divide: its references' bounds within the node's box. */
-inline KdBox kd_bin_box(KdBox box, __global const float* tight_box, uint i) {
+KDRAY_INLINE KdBox kd_bin_box(KdBox box, __global const float* tight_box, uint i) {
     KdBox tight = kd_load_box(tight_box, i);
     tight.lo = fmax(tight.lo, box.lo);
     tight.hi = fmin(tight.hi, box.hi);
@@ -47,7 +47,7 @@ inline KdBox kd_bin_box(KdBox box, __global const float* tight_box, uint i) {
  * *axis and *pos; 0 when no plane lies strictly inside the box. A plane's counts are those of
  * the bins: below, the references whose lo bin lies before it; above, those whose hi bin lies at
  * or after it. The exact classification follows the choice. */
-inline int kd_best_large_split(KdBox box, KdBox tight, uint i, __global const uint* node_chunk,
+KDRAY_INLINE int kd_best_large_split(KdBox box, KdBox tight, uint i, __global const uint* node_chunk,
                                __global const uint* chunk_bins, uint count, float cost_traversal,
                                float cost_intersection, float empty_bonus, uint* axis,
                                float* pos) {

@@ -86,7 +86,7 @@ __kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const f
  * so a triangle whose box straddles a split may still miss one child inside this node (a long
  * diagonal triangle past the corner of a deep node). A straddling triangle whose plane misses a
  * child's box leaves that child. */
-inline void kd_drop_missed_triangles(ulong* below, ulong* above, KdBox box, uint axis, float split,
+KDRAY_INLINE void kd_drop_missed_triangles(ulong* below, ulong* above, KdBox box, uint axis, float split,
                                      uint start, const KdClippedTable* table,
                                      __global const uint* ref_tri,
                                      __global const float* triangles) {

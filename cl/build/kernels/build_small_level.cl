@@ -28,18 +28,18 @@
 #include "cl/build/kernels/build_small_reclip.cl"
 #include "cl/build/kernels/build_small_search.cl"
 
-inline ulong kd_join_mask(uint lo, uint hi) {
+KDRAY_INLINE ulong kd_join_mask(uint lo, uint hi) {
     return ((ulong)hi << 32) | (ulong)lo;
 }
 
-inline KdBox kd_level_box(const float* b) {
+KDRAY_INLINE KdBox kd_level_box(const float* b) {
     KdBox box;
     box.lo = (float3)(b[0], b[1], b[2]);
     box.hi = (float3)(b[3], b[4], b[5]);
     return box;
 }
 
-inline void kd_store_level_box(KdBox box, float* b) {
+KDRAY_INLINE void kd_store_level_box(KdBox box, float* b) {
     b[0] = box.lo.x;
     b[1] = box.lo.y;
     b[2] = box.lo.z;
@@ -79,7 +79,7 @@ __kernel void kd_start_small_level(KdSmallBatchArgs a, __global const KdSmallRoo
  * with their candidates, masks and planes. Work-item lid clips reference lid, then computes the
  * masks of table entry lid. keep_bits: two words of local scratch. Returns the table's size.
  * Every work-item of the group must call it (barriers). */
-inline uint kd_group_clip_table(KdBox box, ulong mask, uint start, __global const float* ref_box,
+KDRAY_INLINE uint kd_group_clip_table(KdBox box, ulong mask, uint start, __global const float* ref_box,
                                 __global const uint* ref_tri, __global const float* triangles,
                                 __local KdClippedTable* t, __local uint* keep_bits, uint lid) {
     if (lid < 2) keep_bits[lid] = 0;
@@ -111,7 +111,7 @@ inline uint kd_group_clip_table(KdBox box, ulong mask, uint start, __global cons
 }
 
 /* A mask over a local table as a mask over the small root's references (kd_root_mask). */
-inline ulong kd_group_root_mask(__local const KdClippedTable* t, ulong mask) {
+KDRAY_INLINE ulong kd_group_root_mask(__local const KdClippedTable* t, ulong mask) {
     ulong root = 0;
     for (ulong rest = mask; rest != 0; rest &= rest - 1) root |= 1ul << t->ref[kd_lowest_bit(rest)];
     return root;

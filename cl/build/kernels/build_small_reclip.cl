@@ -51,7 +51,7 @@ typedef struct KdClippedTable {
  * it lies inside, else the triangle's clipped bounds within the old box; 0 when the triangle
  * misses the node's box (it leaves the node). The one rule of both small-stage shapes
  * (kd_clip_node_table, and build_small_level.cl's work-groups). */
-inline int kd_reclip_box(KdBox box, __global const float* tri, KdBox* b) {
+KDRAY_INLINE int kd_reclip_box(KdBox box, __global const float* tri, KdBox* b) {
     if (!(any(b->lo < box.lo) || any(b->hi > box.hi))) return 1;
     b->lo = fmax(b->lo, box.lo);
     b->hi = fmax(fmin(b->hi, box.hi), b->lo);
@@ -65,7 +65,7 @@ inline int kd_reclip_box(KdBox box, __global const float* tri, KdBox* b) {
 /* The table of the node (box, its references `mask` over the small root's list from start), or 0
  * when none of them extends past the box (clipping changes nothing). *mask becomes the node's
  * references over the table; a triangle that misses the box leaves the node. */
-inline int kd_clip_node_table(KdBox box, ulong* mask, uint start, __global const float* ref_box,
+KDRAY_INLINE int kd_clip_node_table(KdBox box, ulong* mask, uint start, __global const float* ref_box,
                               __global const uint* ref_tri, __global const float* triangles,
                               KdClippedTable* t) {
     int any_cut = 0;
@@ -93,7 +93,7 @@ inline int kd_clip_node_table(KdBox box, ulong* mask, uint start, __global const
 }
 
 /* kd_best_small_split over a clipped table. */
-inline uint kd_best_clipped_split(KdBox box, ulong mask, const KdClippedTable* t,
+KDRAY_INLINE uint kd_best_clipped_split(KdBox box, ulong mask, const KdClippedTable* t,
                                   float cost_traversal, float cost_intersection,
                                   float empty_bonus) {
     KdSplitSearch s;
@@ -109,7 +109,7 @@ inline uint kd_best_clipped_split(KdBox box, ulong mask, const KdClippedTable* t
 }
 
 /* A mask over a clipped table as a mask over the small root's references. */
-inline ulong kd_root_mask(const KdClippedTable* t, ulong mask) {
+KDRAY_INLINE ulong kd_root_mask(const KdClippedTable* t, ulong mask) {
     ulong root = 0;
     for (ulong rest = mask; rest != 0; rest &= rest - 1) root |= 1ul << t->ref[kd_lowest_bit(rest)];
     return root;

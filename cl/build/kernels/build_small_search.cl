@@ -10,27 +10,27 @@
 /* The six split candidates of a reference's box (6 floats, lo.xyz hi.xyz) in the lanes of one
  * float8: lane k = 2 * axis + side is the box's lo (side 0) or hi (side 1) on that axis; lanes 6
  * and 7 are 0. */
-inline float8 kd_candidate_lanes(__global const float* b) {
+KDRAY_INLINE float8 kd_candidate_lanes(__global const float* b) {
     return (float8)(b[0], b[3], b[1], b[4], b[2], b[5], 0.0f, 0.0f);
 }
 
 /* A box's bounds beside those lanes: *lo and *hi hold, in lane 2 * axis + side, its lo and hi on
  * that axis (lanes 6 and 7: 0). */
-inline void kd_box_lanes(KdBox box, float8* lo, float8* hi) {
+KDRAY_INLINE void kd_box_lanes(KdBox box, float8* lo, float8* hi) {
     *lo = (float8)(box.lo.x, box.lo.x, box.lo.y, box.lo.y, box.lo.z, box.lo.z, 0.0f, 0.0f);
     *hi = (float8)(box.hi.x, box.hi.x, box.hi.y, box.hi.y, box.hi.z, box.hi.z, 0.0f, 0.0f);
 }
 
 /* The lanes (of a reference's six candidates, lane 2 * axis + side at pos) whose planar triangles
  * go above: the hi lanes of the axes on which the reference is flat (lo and hi at one plane). */
-inline int8 kd_planar_above_lanes(float8 pos) {
+KDRAY_INLINE int8 kd_planar_above_lanes(float8 pos) {
     const int8 odd = (int8)(0, -1, 0, -1, 0, -1, 0, 0);
     return odd & (pos == pos.s00224466);
 }
 
 /* The sides of one candidate plane per lane (at pos) that a box (lo, hi lanes) lies on, -1 where
  * true; planar_above: the lanes whose planar triangles go above (kd_compute_split_masks). */
-inline void kd_candidate_sides(float8 pos, int8 planar_above, float8 lo, float8 hi, int8* below,
+KDRAY_INLINE void kd_candidate_sides(float8 pos, int8 planar_above, float8 lo, float8 hi, int8* below,
                                int8* above) {
     const int8 crosses_up = hi > pos;
     *above = crosses_up | (planar_above & (lo >= pos));
@@ -45,7 +45,7 @@ inline void kd_candidate_sides(float8 pos, int8 planar_above, float8 lo, float8 
  * masks are over boxes clipped to the small root (or to a re-clipping ancestor), not to the node,
  * so on a face they would also count the triangles that only extend past it. Lanes that split
  * nothing (other candidates on a face, lanes 6 and 7) get no child at all: *valid is 0 there. */
-inline void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above, float8 pos, float8 lo,
+KDRAY_INLINE void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above, float8 pos, float8 lo,
                                   float8 hi, ulong8* below_out, ulong8* above_out, long8* valid) {
     const int8 lo_lane = (int8)(-1, 0, -1, 0, -1, 0, 0, 0);
     const int8 hi_lane = (int8)(0, -1, 0, -1, 0, -1, 0, 0);
@@ -63,7 +63,7 @@ inline void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above, float
  * reference whose candidate lanes are pos and masks below and above (kd_candidate_children), and
  * the split plane's position. The one split of both small-stage shapes, so that their trees are
  * the same. */
-inline float kd_split_at_candidate(float8 pos, ulong8 below, ulong8 above, ulong mask, KdBox box,
+KDRAY_INLINE float kd_split_at_candidate(float8 pos, ulong8 below, ulong8 above, ulong mask, KdBox box,
                                    uint k, ulong* below_child, ulong* above_child) {
     float candidate_pos[8];
     vstore8(pos, 0, candidate_pos);
@@ -104,7 +104,7 @@ typedef struct KdSplitSearch {
     uint8 lane_candidate;
 } KdSplitSearch;
 
-inline void kd_start_split_search(KdSplitSearch* s, KdBox box, ulong mask, float cost_traversal,
+KDRAY_INLINE void kd_start_split_search(KdSplitSearch* s, KdBox box, ulong mask, float cost_traversal,
                                   float cost_intersection, float empty_bonus) {
     /* Child area = 2 (cross + d * ring); the 2 and 1/area fold into one scale of the counts. */
     s->cost_scale = cost_intersection * 2.0f / kd_box_area(box);
@@ -125,7 +125,7 @@ inline void kd_start_split_search(KdSplitSearch* s, KdBox box, ulong mask, float
  * skylake-avx512, which has no vector popcount, to byte-table lookups a 128-bit quarter at a time,
  * about 60 instructions for the two counts of a search step (Kitchen build 67.9 -> 61.9 ms, the
  * median of 5 interleaved rounds of 7 builds). GPUs count bits in one instruction. */
-inline ulong8 kd_popcount8(ulong8 x) {
+KDRAY_INLINE ulong8 kd_popcount8(ulong8 x) {
 #if KDRAY_SWAR_POPCOUNT
     x = x - ((x >> 1) & 0x5555555555555555ul);
     x = (x & 0x3333333333333333ul) + ((x >> 2) & 0x3333333333333333ul);
@@ -138,7 +138,7 @@ inline ulong8 kd_popcount8(ulong8 x) {
 
 /* The six candidates of one reference (at pos, numbered first_candidate + lane), given their
  * masks below and above. */
-inline void kd_price_candidates(KdSplitSearch* s, float8 pos, ulong8 below, ulong8 above,
+KDRAY_INLINE void kd_price_candidates(KdSplitSearch* s, float8 pos, ulong8 below, ulong8 above,
                                 uint first_candidate) {
     const uint8 lane_index = (uint8)(0, 1, 2, 3, 4, 5, 6, 7);
     long8 valid;
@@ -161,7 +161,7 @@ inline void kd_price_candidates(KdSplitSearch* s, float8 pos, ulong8 below, ulon
 /* The cheapest cost found (C_i N, the leaf's, when no candidate beat it): the cost of
  * kd_cheapest_candidate's pick, which the per-level stage's work-groups reduce
  * (build_small_level.cl). */
-inline float kd_cheapest_cost(const KdSplitSearch* s) {
+KDRAY_INLINE float kd_cheapest_cost(const KdSplitSearch* s) {
     const float4 cost4 = fmin(s->lane_cost.lo, s->lane_cost.hi);
     const float2 cost2 = fmin(cost4.lo, cost4.hi);
     return fmin(cost2.lo, cost2.hi);
@@ -173,7 +173,7 @@ inline float kd_cheapest_cost(const KdSplitSearch* s) {
  * selects through one best cost, half of the search's time; a scalar loop over the lanes
  * branched on every lane, 13%). Lanes 6 and 7, and lanes that found nothing cheaper than the
  * leaf, hold the leaf's cost and NO_CANDIDATE, so they change neither. */
-inline uint kd_cheapest_candidate(const KdSplitSearch* s) {
+KDRAY_INLINE uint kd_cheapest_candidate(const KdSplitSearch* s) {
     const float best_cost = kd_cheapest_cost(s);
     const uint8 at_best =
         select((uint8)(KDRAY_NO_CANDIDATE), s->lane_candidate, as_uint8(s->lane_cost == best_cost));
@@ -184,7 +184,7 @@ inline uint kd_cheapest_candidate(const KdSplitSearch* s) {
 
 /* The split of a node whose mask is over the small root's references (start..), by their masks
  * in root_masks. */
-inline uint kd_best_small_split(KdBox box, ulong mask, uint start, __global const float* ref_box,
+KDRAY_INLINE uint kd_best_small_split(KdBox box, ulong mask, uint start, __global const float* ref_box,
                                 __global const ulong* root_masks, float cost_traversal,
                                 float cost_intersection, float empty_bonus) {
     KdSplitSearch s;

@@ -51,12 +51,12 @@ typedef struct KdPacketHit {
 } KdPacketHit;
 
 /* Component `axis` (uniform over the packet) of a vector triple. */
-inline float16 kd_packet_axis(const float16* v, uint axis) {
+KDRAY_INLINE float16 kd_packet_axis(const float16* v, uint axis) {
     return axis == 0 ? v[0] : (axis == 1 ? v[1] : v[2]);
 }
 
 /* Per lane, component k[lane] of the triangle corner c (three floats). */
-inline float16 kd_packet_pick(int16 k, __global const float* c) {
+KDRAY_INLINE float16 kd_packet_pick(int16 k, __global const float* c) {
     return select(select((float16)(c[2]), (float16)(c[1]), k == 1), (float16)(c[0]), k == 0);
 }
 
@@ -64,7 +64,7 @@ inline float16 kd_packet_pick(int16 k, __global const float* c) {
  * packet's distances are the single ray's bit for bit; `fallback` elsewhere. Only lanes whose ray
  * passes inside the triangle with a poorly conditioned float t get here (kd_float_t_condition),
  * which is rare on ordinary meshes. */
-inline float16 kd_packet_plane_distance(const KdPacket* p, __global const float* tri, int16 lanes,
+KDRAY_INLINE float16 kd_packet_plane_distance(const KdPacket* p, __global const float* tri, int16 lanes,
                                         float16 fallback) {
     float t[16], o[3][16], d[3][16];
     int in[16];
@@ -163,7 +163,7 @@ typedef struct KdPacketRays {
 } KdPacketRays;
 
 /* Per lane, v[k[lane]] of a vector triple. */
-inline float16 kd_packet_pick3(int16 k, const float16* v) {
+KDRAY_INLINE float16 kd_packet_pick3(int16 k, const float16* v) {
     return select(select(v[2], v[1], k == 1), v[0], k == 0);
 }
 

@@ -22,7 +22,7 @@
 /* The scene view the kernels read: the tree's buffers, the launch's box, and the frame's arrays
  * at their byte offsets in scene_data. vertex_normals is 0 where the scene has none (flat
  * shading). */
-inline KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
+KDRAY_INLINE KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
                                  __global const float* triangles, __global const uchar* scene_data,
                                  const KdSceneLayout* layout, const KdRenderLaunch* launch) {
     KdSceneView scene;
@@ -45,17 +45,17 @@ inline KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd
 }
 
 /* kd_hash and kd_unit_float of core/kd_render.h, per lane. */
-inline uint16 kd_hash16(uint16 x) {
+KDRAY_INLINE uint16 kd_hash16(uint16 x) {
     KDRAY_LOWBIAS32(x);
     return x;
 }
-inline float16 kd_unit_float16(uint16 h) {
+KDRAY_INLINE float16 kd_unit_float16(uint16 h) {
     return KDRAY_UNIT_FLOAT(convert_float16, h);
 }
 
 /* Primary ray r of pixels (x, y), one per lane: kd_primary_ray and kd_camera_ray of core/
  * kd_render.h through the same macros, so that each lane's ray is the scalar one bit for bit. */
-inline KdPacketRays kd_primary_packet(const KdView* view, uint16 x, uint16 y, kd_u32 r,
+KDRAY_INLINE KdPacketRays kd_primary_packet(const KdView* view, uint16 x, uint16 y, kd_u32 r,
                                       int16 valid) {
     float16 px = convert_float16(x) + 0.5f, py = convert_float16(y) + 0.5f;
     if (view->spp > 1u && r != view->spp) {

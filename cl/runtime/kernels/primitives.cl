@@ -71,7 +71,7 @@ __kernel void kd_compact_by_flags(__global const uint* values, __global const ui
 
 /* out = the union of boxes[first .. end) (lo.xyz hi.xyz each); an empty range gives
  * lo = +inf, hi = -inf. Both steps of the segmented reduction below are this loop. */
-inline void kd_union_boxes(__global const float* boxes, uint first, uint end, __global float* out) {
+KDRAY_INLINE void kd_union_boxes(__global const float* boxes, uint first, uint end, __global float* out) {
     float3 bmin = (float3)(INFINITY), bmax = (float3)(-INFINITY);
     for (uint k = first; k < end; ++k) {
         __global const float* b = boxes + (size_t)k * KDRAY_BOX_FLOATS;
