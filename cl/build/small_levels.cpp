@@ -46,8 +46,7 @@ void build_batch_levels(BuildContext& ctx, const SmallRoots& small, const Triang
         const cl_uint room =
             checked_u32(std::uint64_t(end) + 2 * std::uint64_t(count), "small level nodes");
         ctx.reserve<KdSmallLevelNode>(nodes, room, end, "small level nodes");
-        with_cl_context("setting the small level node count",
-                        [&] { q.enqueueFillBuffer(next_free.buffer(), end, 0, sizeof(cl_uint)); });
+        ctx.primitives.fill(next_free.buffer(), end, 1);
         enqueue_kernel(q, k.split_small_level, std::size_t(count) * KDRAY_LAUNCH_GROUP, args, begin,
                        count, small.roots.buffer(), small.ref_box.buffer(), out.side_masks.buffer(),
                        small.ref_tri.buffer(), triangles.triangles.buffer(), nodes.buffer(),
@@ -65,10 +64,8 @@ void build_batch_levels(BuildContext& ctx, const SmallRoots& small, const Triang
     for (auto it = levels.rbegin(); it != levels.rend(); ++it)
         enqueue_kernel(q, k.size_small_level, it->second, it->first, it->second, nodes.buffer(),
                        subtree_nodes.buffer(), subtree_refs.buffer());
-    with_cl_context("clearing the small roots' positions", [&] {
-        q.enqueueFillBuffer(position.buffer(), cl_uint(0), 0, batch.roots * sizeof(cl_uint));
-        q.enqueueFillBuffer(leaf_position.buffer(), cl_uint(0), 0, batch.roots * sizeof(cl_uint));
-    });
+    ctx.primitives.fill(position.buffer(), 0, batch.roots);
+    ctx.primitives.fill(leaf_position.buffer(), 0, batch.roots);
     for (const auto& [first, n] : levels)
         enqueue_kernel(q, k.place_small_level, n, first, n, nodes.buffer(), subtree_nodes.buffer(),
                        subtree_refs.buffer(), position.buffer(), leaf_position.buffer());

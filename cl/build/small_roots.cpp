@@ -21,8 +21,8 @@ void SmallRoots::make_scene_root(BuildContext& ctx, const TriangleBounds& triang
                                     n * sizeof(cl_uint));
         ctx.queue.enqueueCopyBuffer(triangles.ref_box.buffer(), ref_box.buffer(), 0, 0,
                                     n * sizeof(KdBuildBox));
-        ctx.queue.enqueueFillBuffer(ref_root.buffer(), cl_uint(0), 0, n * sizeof(cl_uint));
     });
+    ctx.primitives.fill(ref_root.buffer(), 0, n);
     ctx.write(roots, std::vector<KdSmallRoot>{{build_box(bounds), 0, n, 0, 0}});
     ctx.write(output.records,
               std::vector<KdBuildNode>{{KDRAY_SMALL_ROOT_AXIS, 0.0f, {0, 0}, 0, 0}});

@@ -80,9 +80,7 @@ void build_batch_subtrees(BuildContext& ctx, const SmallRoots& small,
                           const TriangleBounds& triangles, SmallSubtrees& out, SmallBatch& batch,
                           const DeviceArray& totals) {
     cl::CommandQueue& q = ctx.queue;
-    with_cl_context("clearing the small stage totals", [&] {
-        q.enqueueFillBuffer(totals.buffer(), cl_uint(0), 0, 3 * sizeof(cl_uint));
-    });
+    ctx.primitives.fill(totals.buffer(), 0, 3);
     std::array<cl_uint, 3> total{};
     auto build_subtrees = [&](cl_uint second_pass, const DeviceArray& second_offset,
                               const DeviceArray& records) {
@@ -115,17 +113,14 @@ void build_batch_subtrees(BuildContext& ctx, const SmallRoots& small,
 cl_uint place_second_pass(BuildContext& ctx, const SmallRoots& small, const SmallSubtrees& out,
                           SmallBatch& batch) {
     cl::CommandQueue& q = ctx.queue;
-    // Each outgrown subtree's node count, scanned into its place (one entry more: the total).
+    // Each outgrown subtree's node count, scanned into its place; the scan writes the total
+    // after the last (one entry more).
     batch.second_offset =
         ctx.allocate<cl_uint>(std::size_t(batch.roots) + 1, "second-pass record offsets");
-    with_cl_context("clearing the second-pass record offsets", [&] {
-        q.enqueueFillBuffer(batch.second_offset.buffer(), cl_uint(0),
-                            std::size_t(batch.roots) * sizeof(cl_uint), sizeof(cl_uint));
-    });
     enqueue_kernel(q, ctx.kernels.second_pass_records, batch.roots, batch.args(ctx.params, 0),
                    small.roots.buffer(), out.node_count.buffer(), batch.second_offset.buffer());
     ctx.primitives.exclusive_scan(batch.second_offset.buffer(), batch.second_offset.buffer(),
-                                  std::size_t(batch.roots) + 1);
+                                  batch.roots);
     return ctx.read_uint(batch.second_offset, batch.roots);
 }
 
@@ -146,7 +141,7 @@ SmallSubtrees run_small_stage(BuildContext& ctx, const SmallRoots& small,
     out.node_count = ctx.allocate<cl_uint>(roots, "subtree node counts");
     out.leaf_refs = ctx.allocate<cl_uint>(roots, "subtree leaf references");
     if (small.count == 0) return out;
-    checked_u32(KDRAY_CANDIDATES_PER_REF * std::size_t(small.refs), "split candidates");
+    checked_u32(KDRAY_CANDIDATE_STRIDE * std::size_t(small.refs), "split candidates");
     out.batches = small_batches(ctx, small, first_scale, batch_bytes);
 
     // The per-root kernel's totals (read once per batch).

@@ -5,11 +5,13 @@
 
 #include "cl/runtime/launch.h"
 #include "cl/runtime/program_cache.h"
+#include "core/error.h"
 
 namespace kdray {
 
 struct ClPrimitives::Kernels {
     cl::Kernel scan_chunks, scan_single, add_chunk_offsets, add_offsets_by_chunk, compact_by_flags;
+    cl::Kernel fill;
     cl::Kernel reduce_box_chunks, reduce_box_segments, count_box_chunks;
 };
 
@@ -22,6 +24,7 @@ ClPrimitives::ClPrimitives(ClDevice& device)
           k.add_chunk_offsets = make_kernel(program, "kd_add_chunk_offsets");
           k.add_offsets_by_chunk = make_kernel(program, "kd_add_chunk_offsets_by_chunk");
           k.compact_by_flags = make_kernel(program, "kd_compact_by_flags");
+          k.fill = make_kernel(program, "kd_fill_uint");
           k.reduce_box_chunks = make_kernel(program, "kd_reduce_box_chunks");
           k.reduce_box_segments = make_kernel(program, "kd_reduce_box_segments");
           k.count_box_chunks = make_kernel(program, "kd_count_box_chunks");
@@ -29,6 +32,14 @@ ClPrimitives::ClPrimitives(ClDevice& device)
       })) {}
 
 void ClPrimitives::exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, std::size_t n) {
+    // The total goes to out[n]: a buffer of n entries would be written past its end, which no
+    // CPU device notices (a scan of second-pass offsets did so until Oclgrind reported it).
+    const std::size_t out_bytes =
+        with_cl_context("asking a scan's output size", [&] { return out.getInfo<CL_MEM_SIZE>(); });
+    if (out_bytes < (n + 1) * sizeof(cl_uint))
+        throw Error("exclusive scan of " + std::to_string(n) + " values into a buffer of " +
+                    std::to_string(out_bytes) + " bytes: it needs " +
+                    std::to_string((n + 1) * sizeof(cl_uint)) + " (the total comes last)");
     cl::CommandQueue& queue = device_.queue();
     // Chunk length: enough chunks to fill the device (a few hundred items per compute unit), at
     // least 16 elements so the sequential loop amortises the launch, and one chunk for small n.
@@ -53,6 +64,10 @@ void ClPrimitives::exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, s
     else
         enqueue_kernel(queue, kernels_.add_chunk_offsets, n, out, cl_uint(n), cl_uint(chunk),
                        cl_uint(chunks), sums);
+}
+
+void ClPrimitives::fill(const cl::Buffer& out, cl_uint value, std::size_t n) {
+    enqueue_kernel(device_.queue(), kernels_.fill, n, out, value, cl_uint(n));
 }
 
 std::size_t ClPrimitives::compact(const cl::Buffer& values, const cl::Buffer& flags,

@@ -18,8 +18,13 @@ class ClPrimitives {
     explicit ClPrimitives(ClDevice& device);
 
     /// out[k] = in[0] + ... + in[k-1] for k in [0, n], so out holds n + 1 uints and out[n] is the
-    /// total. out may be in. n may be 0 (out[0] = 0).
+    /// total. out may be in. n may be 0 (out[0] = 0). Throws Error when out is smaller.
     void exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, std::size_t n);
+
+    /// out[k] = value for k in [0, n). A kernel rather than clEnqueueFillBuffer: Oclgrind 21.10
+    /// (Debian 12's) does not mark a filled buffer initialised, so its uninitialised-value check
+    /// reported every later read of one; the kernel is the same single pass.
+    void fill(const cl::Buffer& out, cl_uint value, std::size_t n);
 
     /// Writes the values[k] with flags[k] (0 or 1) != 0 to out, in order, and returns how many
     /// (read back: it synchronises).

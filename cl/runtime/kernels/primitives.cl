@@ -1,6 +1,6 @@
 /* primitives.cl — the data-parallel building blocks of the kd-tree build (Zhou et al. 2008, §3
  * relies on scan, compaction and segmented reduction throughout): exclusive scan of uint, stream
- * compaction by flags, and segmented min/max reduction of boxes.
+ * compaction by flags, segmented min/max reduction of boxes, and a fill.
  *
  * No kernel here uses barriers or local memory: each work-item owns a contiguous chunk and works
  * through it sequentially, and the host chains launches (chunk sums, scan of the sums, add
@@ -61,6 +61,12 @@ __kernel void kd_add_chunk_offsets_by_chunk(__global uint* out, uint n, uint chu
     if (i == 0) out[n] = offsets[chunks];
 }
 
+/* out[k] = value for k < n. */
+__kernel void kd_fill_uint(__global uint* out, uint value, uint n) {
+    const uint k = get_global_id(0);
+    if (k < n) out[k] = value;
+}
+
 /* Compaction: element k with flags[k] != 0 goes to out[positions[k]], positions being the
  * exclusive scan of the flags (0/1). */
 __kernel void kd_compact_by_flags(__global const uint* values, __global const uint* flags,
@@ -71,7 +77,8 @@ __kernel void kd_compact_by_flags(__global const uint* values, __global const ui
 
 /* out = the union of boxes[first .. end) (lo.xyz hi.xyz each); an empty range gives
  * lo = +inf, hi = -inf. Both steps of the segmented reduction below are this loop. */
-KDRAY_INLINE void kd_union_boxes(__global const float* boxes, uint first, uint end, __global float* out) {
+KDRAY_INLINE void kd_union_boxes(__global const float* boxes, uint first, uint end,
+                                 __global float* out) {
     float3 bmin = (float3)(INFINITY), bmax = (float3)(-INFINITY);
     for (uint k = first; k < end; ++k) {
         __global const float* b = boxes + (size_t)k * KDRAY_BOX_FLOATS;
