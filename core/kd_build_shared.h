@@ -59,9 +59,13 @@
 #define KDRAY_BIN_COUNTS 6u
 
 /* Split candidates per small-root reference: the planes of its box's lo and hi on each axis
- * (candidate k of a reference: axis k / 2, its hi when k is odd), numbered reference by
- * reference, so that candidate c is candidate c % 6 of reference c / 6 (build_small_search.cl). */
-#define KDRAY_CANDIDATES_PER_REF 6u
+ * (candidate k of a reference: axis k / 2, its hi when k is odd), the six lanes of a float8
+ * (build_small_search.cl). A candidate's number is KDRAY_CANDIDATE_STRIDE * reference + k: the
+ * lanes' own stride, so that candidate c is lane c % 8 of reference c / 8, a shift and a mask.
+ * (With a stride of 6 the division and remainder were one udiv and a `freeze` after LLVM's
+ * DivRemPairs, an instruction that Oclgrind 21.10's uninitialised-value check cannot run.) */
+#define KDRAY_CANDIDATE_STRIDE 8u
+#define KDRAY_CANDIDATE_STRIDE_SHIFT 3u
 
 /* Split-candidate masks per small-root reference (build_small.cl): 6 candidates below and 6
  * above, each group padded to 8 ulongs, so that a reference's masks load as two ulong8. */

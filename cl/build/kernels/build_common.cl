@@ -20,7 +20,9 @@ typedef struct KdBox {
     float3 lo, hi;
 } KdBox;
 
-KDRAY_INLINE float kd_axis_of(float3 v, uint axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+KDRAY_INLINE float kd_axis_of(float3 v, uint axis) {
+    return axis == 0 ? v.x : (axis == 1 ? v.y : v.z);
+}
 
 KDRAY_INLINE float3 kd_with_axis(float3 v, uint axis, float x) {
     if (axis == 0) v.x = x;
@@ -160,7 +162,9 @@ KDRAY_INLINE int kd_plane_misses_box(const KdTrianglePlane* p, KdBox box) {
 }
 
 /* The index of the lowest set bit of a mask of a small root's references (bits != 0). */
-KDRAY_INLINE uint kd_lowest_bit(ulong bits) { return (uint)popcount((bits & (0ul - bits)) - 1ul); }
+KDRAY_INLINE uint kd_lowest_bit(ulong bits) {
+    return (uint)popcount((bits & (0ul - bits)) - 1ul);
+}
 
 /* Index of the last of the n ascending `starts` that is <= x: the segment holding element x. */
 KDRAY_INLINE uint kd_find_segment(__global const uint* starts, uint n, uint x) {
@@ -227,9 +231,10 @@ KDRAY_INLINE KdSmallNode kd_small_leaf(uint first, uint count, ulong mask) {
  * reference go: the below child right after its parent, the above child after the below child's
  * subtree (subtree_nodes and subtree_refs: each subtree's node and leaf reference counts). The one
  * rule of the output stage and of the per-level small stage. */
-KDRAY_INLINE void kd_place_children(uint id, uint below, uint above, __global const uint* subtree_nodes,
-                              __global const uint* subtree_refs, __global uint* position,
-                              __global uint* leaf_position) {
+KDRAY_INLINE void kd_place_children(uint id, uint below, uint above,
+                                    __global const uint* subtree_nodes,
+                                    __global const uint* subtree_refs, __global uint* position,
+                                    __global uint* leaf_position) {
     position[below] = position[id] + 1;
     position[above] = position[id] + 1 + subtree_nodes[below];
     leaf_position[below] = leaf_position[id];

@@ -47,10 +47,11 @@ KDRAY_INLINE KdBox kd_bin_box(KdBox box, __global const float* tight_box, uint i
  * *axis and *pos; 0 when no plane lies strictly inside the box. A plane's counts are those of
  * the bins: below, the references whose lo bin lies before it; above, those whose hi bin lies at
  * or after it. The exact classification follows the choice. */
-KDRAY_INLINE int kd_best_large_split(KdBox box, KdBox tight, uint i, __global const uint* node_chunk,
-                               __global const uint* chunk_bins, uint count, float cost_traversal,
-                               float cost_intersection, float empty_bonus, uint* axis,
-                               float* pos) {
+KDRAY_INLINE int kd_best_large_split(KdBox box, KdBox tight, uint i,
+                                     __global const uint* node_chunk,
+                                     __global const uint* chunk_bins, uint count,
+                                     float cost_traversal, float cost_intersection,
+                                     float empty_bonus, uint* axis, float* pos) {
     uint counts[KDRAY_BIN_VALUES];
     for (uint k = 0; k < KDRAY_BIN_VALUES; ++k) counts[k] = 0;
     for (uint c = node_chunk[i]; c < node_chunk[i + 1]; ++c) {

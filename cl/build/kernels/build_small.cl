@@ -86,10 +86,10 @@ __kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const f
  * so a triangle whose box straddles a split may still miss one child inside this node (a long
  * diagonal triangle past the corner of a deep node). A straddling triangle whose plane misses a
  * child's box leaves that child. */
-KDRAY_INLINE void kd_drop_missed_triangles(ulong* below, ulong* above, KdBox box, uint axis, float split,
-                                     uint start, const KdClippedTable* table,
-                                     __global const uint* ref_tri,
-                                     __global const float* triangles) {
+KDRAY_INLINE void kd_drop_missed_triangles(ulong* below, ulong* above, KdBox box, uint axis,
+                                           float split, uint start, const KdClippedTable* table,
+                                           __global const uint* ref_tri,
+                                           __global const float* triangles) {
     for (ulong rest = *below & *above; rest != 0; rest &= rest - 1) {
         const ulong bit = rest & (0ul - rest);
         const uint j = kd_lowest_bit(rest);
@@ -193,8 +193,8 @@ __kernel void kd_build_small_subtrees(
             continue;
         }
         /* Inner node: go on with the below child, keep the above child for later. */
-        const uint ref = best / KDRAY_CANDIDATES_PER_REF, k = best % KDRAY_CANDIDATES_PER_REF,
-                   axis = k / 2;
+        const uint ref = best >> KDRAY_CANDIDATE_STRIDE_SHIFT,
+                   k = best & (KDRAY_CANDIDATE_STRIDE - 1u), axis = k / 2;
         float8 pos;
         ulong8 below, above;
         const KdClippedTable* node_table = 0;

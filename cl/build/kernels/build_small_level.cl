@@ -79,9 +79,10 @@ __kernel void kd_start_small_level(KdSmallBatchArgs a, __global const KdSmallRoo
  * with their candidates, masks and planes. Work-item lid clips reference lid, then computes the
  * masks of table entry lid. keep_bits: two words of local scratch. Returns the table's size.
  * Every work-item of the group must call it (barriers). */
-KDRAY_INLINE uint kd_group_clip_table(KdBox box, ulong mask, uint start, __global const float* ref_box,
-                                __global const uint* ref_tri, __global const float* triangles,
-                                __local KdClippedTable* t, __local uint* keep_bits, uint lid) {
+KDRAY_INLINE uint kd_group_clip_table(KdBox box, ulong mask, uint start,
+                                      __global const float* ref_box, __global const uint* ref_tri,
+                                      __global const float* triangles, __local KdClippedTable* t,
+                                      __local uint* keep_bits, uint lid) {
     if (lid < 2) keep_bits[lid] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
     int keep = 0;
@@ -137,6 +138,9 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
     if (g >= level_nodes) return;
     const uint id = level_begin + g;
     const KdSmallLevelNode n = nodes[id];
+    /* Work-item 0 rewrites nodes[id] below; the group's other work-items must have read it first
+     * (Oclgrind --data-races reported the race). */
+    barrier(CLK_GLOBAL_MEM_FENCE);
     const uint reclip_refs = min(a.reclip_refs, KDRAY_RECLIP_REFS);
     const KdSmallRoot root = small_roots[n.root];
     const uint start = root.ref_start;
@@ -154,6 +158,7 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
     if (popcount(mask) > a.leaf_size && n.depth < a.max_depth && kd_box_area(box) > 0.0f) {
         /* Re-clip when the node is small enough and some of its references reach past its box
          * (kd_clip_node_table); on a table already, rebuild its ancestor's. */
+        int fresh_table = 0;
         if (!on_table && popcount(mask) <= reclip_refs) {
             if (lid == 0) scratch[0] = 0;
             barrier(CLK_LOCAL_MEM_FENCE);
@@ -166,14 +171,16 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
                 on_table = 1;
                 table_box = box;
                 table_mask = mask;
-                const uint size = kd_group_clip_table(box, mask, start, ref_box, ref_tri, triangles,
-                                                      &table, scratch + 1, lid);
-                mask = (1ul << size) - 1ul;
-                have_table = 1;
+                fresh_table = 1;
             }
-        } else if (on_table) {
-            kd_group_clip_table(table_box, table_mask, start, ref_box, ref_tri, triangles, &table,
-                                scratch + 1, lid);
+        }
+        /* One call site for the group clip: PoCL 3.1's work-group compiler (LLVM 15) crashed in
+         * its inliner on this kernel while it had two, each with barriers (a cold kernel cache
+         * segfaulted every per-level build). */
+        if (on_table) {
+            const uint size = kd_group_clip_table(table_box, table_mask, start, ref_box, ref_tri,
+                                                  triangles, &table, scratch + 1, lid);
+            if (fresh_table) mask = size >= 64 ? ~0ul : (1ul << size) - 1ul;
             have_table = 1;
         }
 
@@ -186,13 +193,13 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
                     &s, vload8(lid, table.candidates),
                     convert_ulong8(vload8(0, table.masks + lid * KDRAY_MASK_WORDS_PER_REF)),
                     convert_ulong8(vload8(1, table.masks + lid * KDRAY_MASK_WORDS_PER_REF)),
-                    lid * KDRAY_CANDIDATES_PER_REF);
+                    lid * KDRAY_CANDIDATE_STRIDE);
             else
                 kd_price_candidates(
                     &s, kd_candidate_lanes(ref_box + (size_t)(start + lid) * KDRAY_BOX_FLOATS),
                     vload8(0, root_masks + (size_t)lid * KDRAY_MASK_WORDS_PER_REF),
                     vload8(1, root_masks + (size_t)lid * KDRAY_MASK_WORDS_PER_REF),
-                    (start + lid) * KDRAY_CANDIDATES_PER_REF);
+                    (start + lid) * KDRAY_CANDIDATE_STRIDE);
         }
         group_candidate[lid] = kd_cheapest_candidate(&s);
         group_cost[lid] = kd_cheapest_cost(&s);
@@ -227,7 +234,7 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
     }
 
     /* Inner node: the children of the best candidate, as kd_build_small_subtrees makes them. */
-    const uint ref = best / KDRAY_CANDIDATES_PER_REF, k = best % KDRAY_CANDIDATES_PER_REF,
+    const uint ref = best >> KDRAY_CANDIDATE_STRIDE_SHIFT, k = best & (KDRAY_CANDIDATE_STRIDE - 1u),
                axis = k / 2;
     float8 pos;
     ulong8 below, above;

@@ -65,9 +65,9 @@ KDRAY_INLINE int kd_reclip_box(KdBox box, __global const float* tri, KdBox* b) {
 /* The table of the node (box, its references `mask` over the small root's list from start), or 0
  * when none of them extends past the box (clipping changes nothing). *mask becomes the node's
  * references over the table; a triangle that misses the box leaves the node. */
-KDRAY_INLINE int kd_clip_node_table(KdBox box, ulong* mask, uint start, __global const float* ref_box,
-                              __global const uint* ref_tri, __global const float* triangles,
-                              KdClippedTable* t) {
+KDRAY_INLINE int kd_clip_node_table(KdBox box, ulong* mask, uint start,
+                                    __global const float* ref_box, __global const uint* ref_tri,
+                                    __global const float* triangles, KdClippedTable* t) {
     int any_cut = 0;
     for (ulong rest = *mask; rest != 0 && !any_cut; rest &= rest - 1) {
         const KdBox b = kd_load_box(ref_box, start + kd_lowest_bit(rest));
@@ -94,8 +94,8 @@ KDRAY_INLINE int kd_clip_node_table(KdBox box, ulong* mask, uint start, __global
 
 /* kd_best_small_split over a clipped table. */
 KDRAY_INLINE uint kd_best_clipped_split(KdBox box, ulong mask, const KdClippedTable* t,
-                                  float cost_traversal, float cost_intersection,
-                                  float empty_bonus) {
+                                        float cost_traversal, float cost_intersection,
+                                        float empty_bonus) {
     KdSplitSearch s;
     kd_start_split_search(&s, box, mask, cost_traversal, cost_intersection, empty_bonus);
     for (ulong rest = mask; rest != 0; rest &= rest - 1) {
@@ -103,7 +103,7 @@ KDRAY_INLINE uint kd_best_clipped_split(KdBox box, ulong mask, const KdClippedTa
         kd_price_candidates(&s, vload8(l, t->candidates),
                             convert_ulong8(vload8(0, t->masks + l * KDRAY_MASK_WORDS_PER_REF)),
                             convert_ulong8(vload8(1, t->masks + l * KDRAY_MASK_WORDS_PER_REF)),
-                            l * KDRAY_CANDIDATES_PER_REF);
+                            l * KDRAY_CANDIDATE_STRIDE);
     }
     return kd_cheapest_candidate(&s);
 }

@@ -30,8 +30,8 @@ KDRAY_INLINE int8 kd_planar_above_lanes(float8 pos) {
 
 /* The sides of one candidate plane per lane (at pos) that a box (lo, hi lanes) lies on, -1 where
  * true; planar_above: the lanes whose planar triangles go above (kd_compute_split_masks). */
-KDRAY_INLINE void kd_candidate_sides(float8 pos, int8 planar_above, float8 lo, float8 hi, int8* below,
-                               int8* above) {
+KDRAY_INLINE void kd_candidate_sides(float8 pos, int8 planar_above, float8 lo, float8 hi,
+                                     int8* below, int8* above) {
     const int8 crosses_up = hi > pos;
     *above = crosses_up | (planar_above & (lo >= pos));
     *below = (lo < pos) | (~planar_above & ~crosses_up);
@@ -45,8 +45,9 @@ KDRAY_INLINE void kd_candidate_sides(float8 pos, int8 planar_above, float8 lo, f
  * masks are over boxes clipped to the small root (or to a re-clipping ancestor), not to the node,
  * so on a face they would also count the triangles that only extend past it. Lanes that split
  * nothing (other candidates on a face, lanes 6 and 7) get no child at all: *valid is 0 there. */
-KDRAY_INLINE void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above, float8 pos, float8 lo,
-                                  float8 hi, ulong8* below_out, ulong8* above_out, long8* valid) {
+KDRAY_INLINE void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above, float8 pos,
+                                        float8 lo, float8 hi, ulong8* below_out, ulong8* above_out,
+                                        long8* valid) {
     const int8 lo_lane = (int8)(-1, 0, -1, 0, -1, 0, 0, 0);
     const int8 hi_lane = (int8)(0, -1, 0, -1, 0, -1, 0, 0);
     below &= node;
@@ -63,8 +64,9 @@ KDRAY_INLINE void kd_candidate_children(ulong8 node, ulong8 below, ulong8 above,
  * reference whose candidate lanes are pos and masks below and above (kd_candidate_children), and
  * the split plane's position. The one split of both small-stage shapes, so that their trees are
  * the same. */
-KDRAY_INLINE float kd_split_at_candidate(float8 pos, ulong8 below, ulong8 above, ulong mask, KdBox box,
-                                   uint k, ulong* below_child, ulong* above_child) {
+KDRAY_INLINE float kd_split_at_candidate(float8 pos, ulong8 below, ulong8 above, ulong mask,
+                                         KdBox box, uint k, ulong* below_child,
+                                         ulong* above_child) {
     float candidate_pos[8];
     vstore8(pos, 0, candidate_pos);
     ulong children[2][8];
@@ -83,8 +85,8 @@ KDRAY_INLINE float kd_split_at_candidate(float8 pos, ulong8 below, ulong8 above,
  * node's box, or on its faces as kd_candidate_children allows, SAH(x) = C_t + C_i (N_L SA_L +
  * N_R SA_R) / SA, the counts by popcount of the children's masks, scaled by (1 - empty_bonus)
  * when a side with some width is empty, as in the reference builder. The search returns the
- * cheapest candidate (6 * reference + lane), or KDRAY_NO_CANDIDATE when C_i N is no more than
- * the best: the node becomes a leaf.
+ * cheapest candidate (KDRAY_CANDIDATE_STRIDE * reference + lane), or KDRAY_NO_CANDIDATE when
+ * C_i N is no more than the best: the node becomes a leaf.
  *
  * Only the candidates of the node's own triangles (the set bits of its mask) are evaluated: the
  * SAH is piecewise linear between those boundaries, so its minimum lies on one of them. The six
@@ -104,8 +106,9 @@ typedef struct KdSplitSearch {
     uint8 lane_candidate;
 } KdSplitSearch;
 
-KDRAY_INLINE void kd_start_split_search(KdSplitSearch* s, KdBox box, ulong mask, float cost_traversal,
-                                  float cost_intersection, float empty_bonus) {
+KDRAY_INLINE void kd_start_split_search(KdSplitSearch* s, KdBox box, ulong mask,
+                                        float cost_traversal, float cost_intersection,
+                                        float empty_bonus) {
     /* Child area = 2 (cross + d * ring); the 2 and 1/area fold into one scale of the counts. */
     s->cost_scale = cost_intersection * 2.0f / kd_box_area(box);
     s->cost_traversal = cost_traversal;
@@ -139,7 +142,7 @@ KDRAY_INLINE ulong8 kd_popcount8(ulong8 x) {
 /* The six candidates of one reference (at pos, numbered first_candidate + lane), given their
  * masks below and above. */
 KDRAY_INLINE void kd_price_candidates(KdSplitSearch* s, float8 pos, ulong8 below, ulong8 above,
-                                uint first_candidate) {
+                                      uint first_candidate) {
     const uint8 lane_index = (uint8)(0, 1, 2, 3, 4, 5, 6, 7);
     long8 valid;
     kd_candidate_children(s->node, below, above, pos, s->lo, s->hi, &below, &above, &valid);
@@ -184,9 +187,10 @@ KDRAY_INLINE uint kd_cheapest_candidate(const KdSplitSearch* s) {
 
 /* The split of a node whose mask is over the small root's references (start..), by their masks
  * in root_masks. */
-KDRAY_INLINE uint kd_best_small_split(KdBox box, ulong mask, uint start, __global const float* ref_box,
-                                __global const ulong* root_masks, float cost_traversal,
-                                float cost_intersection, float empty_bonus) {
+KDRAY_INLINE uint kd_best_small_split(KdBox box, ulong mask, uint start,
+                                      __global const float* ref_box,
+                                      __global const ulong* root_masks, float cost_traversal,
+                                      float cost_intersection, float empty_bonus) {
     KdSplitSearch s;
     kd_start_split_search(&s, box, mask, cost_traversal, cost_intersection, empty_bonus);
     for (ulong rest = mask; rest != 0; rest &= rest - 1) {
@@ -194,7 +198,7 @@ KDRAY_INLINE uint kd_best_small_split(KdBox box, ulong mask, uint start, __globa
         kd_price_candidates(&s, kd_candidate_lanes(ref_box + (size_t)ref * KDRAY_BOX_FLOATS),
                             vload8(0, root_masks + (size_t)j * KDRAY_MASK_WORDS_PER_REF),
                             vload8(1, root_masks + (size_t)j * KDRAY_MASK_WORDS_PER_REF),
-                            ref * KDRAY_CANDIDATES_PER_REF);
+                            ref * KDRAY_CANDIDATE_STRIDE);
     }
     return kd_cheapest_candidate(&s);
 }
