@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "cl/runtime/cl_error.h"
+#include "cl/runtime/program_cache.h"
 #include "core/error.h"
 
 namespace kdray {
@@ -159,7 +160,8 @@ void CL_CALLBACK forget_deleted_buffer(cl_mem mem, void* user_data) {
 
 }  // namespace
 
-ClDevice::ClDevice(const std::string& selector) : ledger_(std::make_shared<BufferLedger>()) {
+ClDevice::ClDevice(const std::string& selector)
+    : ledger_(std::make_shared<BufferLedger>()), program_cache_(std::make_unique<ProgramCache>()) {
     with_cl_context("opening OpenCL device '" + selector + "'", [&] {
         std::vector<FoundDevice> found = find_devices();
         if (found.empty())
@@ -230,6 +232,7 @@ std::vector<std::string> ClDevice::live_buffers() const {
 }
 
 ClDevice::~ClDevice() {
+    program_cache_.reset();  // its kernels may hold the last references to buffers
     buffer_pool_.clear();
 #ifdef KDRAY_SANITIZE
     // A runtime may delete a buffer only once the commands that use it are done.

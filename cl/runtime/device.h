@@ -35,6 +35,7 @@ struct ClDeviceInfo {
 std::vector<ClDeviceInfo> list_cl_devices();
 
 struct BufferLedger;
+class ProgramCache;
 
 /// An opened device: its context, one in-order command queue, and the buffers that finished builds
 /// gave back (BufferPool).
@@ -75,6 +76,10 @@ class ClDevice {
     /// Buffers kept for the next build: at most an eighth of the device's memory, and 1 GiB.
     BufferPool& buffer_pool() { return buffer_pool_; }
 
+    /// The programs and kernels built for this device (cl/runtime/program_cache.h), released with
+    /// it. Thread-safe through its own locks, hence usable on a const device.
+    ProgramCache& program_cache() const { return *program_cache_; }
+
   private:
     cl::Device device_;
     cl::Context context_;
@@ -83,6 +88,7 @@ class ClDevice {
     BufferPool buffer_pool_;
     mutable std::uint64_t allocated_bytes_ = 0;
     std::shared_ptr<BufferLedger> ledger_;  // the buffers of allocate() not deleted yet
+    std::unique_ptr<ProgramCache> program_cache_;
 };
 
 /// The devices on one line, for error messages: "0: NAME (VENDOR, TYPE, VERSION); 1: ...".

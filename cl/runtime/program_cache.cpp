@@ -4,7 +4,6 @@
 #include <chrono>
 #include <map>
 #include <mutex>
-#include <tuple>
 #include <utility>
 
 #include "cl/runtime/cl_error.h"
@@ -14,15 +13,13 @@
 namespace kdray {
 namespace {
 
-using ProgramKey = std::tuple<cl_context, cl_device_id, std::string, std::string>;
-
-std::mutex cache_mutex;
-std::map<ProgramKey, cl::Program> cache;
+// Process-wide counts and the listener (no OpenCL objects: those live in each device's cache).
+std::mutex counts_mutex;
 int builds = 0;
-// compile_ms_total: its own lock, since cached_program holds cache_mutex while it builds.
+std::function<void(const ProgramBuildEvent&)> build_listener;  // under counts_mutex
+// compile_ms_total: its own lock, since cached_program holds counts_mutex while it builds.
 std::mutex compile_mutex;
 double compile_ms = 0;
-std::function<void(const ProgramBuildEvent&)> build_listener;  // under cache_mutex
 
 }  // namespace
 
@@ -32,9 +29,12 @@ cl::Program cached_program(const ClDevice& device, std::string_view file,
     // -Wpsabi notes on 16-lane vectors wherever the CPU lacks AVX-512), where they would land
     // between kdray's own lines; errors still fail the build with the log.
     const std::string options = "-cl-std=CL1.2 -w" + (defines.empty() ? "" : " " + defines);
-    ProgramKey key{device.context()(), device.device()(), std::string(file), options};
-    std::lock_guard<std::mutex> lock(cache_mutex);
-    if (auto it = cache.find(key); it != cache.end()) return it->second;
+    ProgramCache& cache = device.program_cache();
+    ProgramCache::Key key{std::string(file), options};
+    std::lock_guard<std::mutex> lock(cache.programs_mutex);
+    if (auto it = cache.programs.find(key); it != cache.programs.end()) return it->second;
+    // Builds of different devices may overlap; the listener and the counts are the process's.
+    std::lock_guard<std::mutex> counts_lock(counts_mutex);
 
     const std::string what = "building OpenCL program " + std::string(file);
     const std::string_view source = embedded_kernel_source(file);
@@ -60,7 +60,7 @@ cl::Program cached_program(const ClDevice& device, std::string_view file,
                     "' failed with " + cl_error_name(status) + ":\n" + log);
     }
     ++builds;
-    cache.emplace(std::move(key), program);
+    cache.programs.emplace(std::move(key), program);
     return program;
 }
 
@@ -71,26 +71,23 @@ cl::Kernel make_kernel(const cl::Program& program, const char* name) {
     return cl::Kernel(kernel);
 }
 
-std::shared_ptr<void> detail::cached_object(const ClDevice& device, const std::string& key,
-                                            const std::function<std::shared_ptr<void>()>& make) {
-    // Its own lock: make() builds programs, under cache_mutex.
-    static std::mutex objects_mutex;
-    static std::map<ProgramKey, std::shared_ptr<void>> objects;
-    ProgramKey object_key{device.context()(), device.device()(), key, ""};
-    std::lock_guard<std::mutex> lock(objects_mutex);
-    if (auto it = objects.find(object_key); it != objects.end()) return it->second;
+std::shared_ptr<void> detail_cached_object(const ClDevice& device, const std::string& key,
+                                           const std::function<std::shared_ptr<void>()>& make) {
+    ProgramCache& cache = device.program_cache();
+    std::lock_guard<std::mutex> lock(cache.objects_mutex);
+    if (auto it = cache.objects.find(key); it != cache.objects.end()) return it->second;
     std::shared_ptr<void> object = make();
-    objects.emplace(std::move(object_key), object);
+    cache.objects.emplace(key, object);
     return object;
 }
 
 void set_program_build_listener(std::function<void(const ProgramBuildEvent&)> listener) {
-    std::lock_guard<std::mutex> lock(cache_mutex);
+    std::lock_guard<std::mutex> lock(counts_mutex);
     build_listener = std::move(listener);
 }
 
 int program_build_count() {
-    std::lock_guard<std::mutex> lock(cache_mutex);
+    std::lock_guard<std::mutex> lock(counts_mutex);
     return builds;
 }
 

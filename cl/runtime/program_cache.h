@@ -1,21 +1,49 @@
-// program_cache.h — OpenCL programs built from the embedded kernel sources, once per process.
+// program_cache.h — OpenCL programs built from the embedded kernel sources, once per device.
 //
 // A cold PoCL compile takes about a second per program, so a program is built at most once for a
-// given (context, device, file, options) and reused by every later build or trace in the process;
-// across processes PoCL's own on-disk kernel cache (left enabled) skips the compile again.
+// given (device, file, options) and reused by every later build or trace of the device; across
+// processes PoCL's own on-disk kernel cache (left enabled) skips the compile again.
+//
+// The cache belongs to its ClDevice and is released with it, before main returns: an OpenCL call
+// made from a static destructor runs after the runtime's thread-local state is gone (exit destroys
+// thread_local objects first), and Oclgrind's clReleaseProgram then wrote into its freed API-call
+// stack ("corrupted double-linked list" after a failed run).
 #pragma once
 
 #include <functional>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <typeinfo>
+#include <utility>
 
 #include <CL/opencl.hpp>
 
 #include "cl/runtime/device.h"
 
 namespace kdray {
+
+/// One device's built programs and the kernel sets made from them (cached_program,
+/// cached_kernels); ClDevice owns it.
+class ProgramCache {
+  public:
+    ProgramCache() = default;
+    ProgramCache(const ProgramCache&) = delete;
+    ProgramCache& operator=(const ProgramCache&) = delete;
+
+  private:
+    friend cl::Program cached_program(const ClDevice&, std::string_view, const std::string&);
+    friend std::shared_ptr<void> detail_cached_object(
+        const ClDevice&, const std::string&, const std::function<std::shared_ptr<void>()>&);
+    using Key = std::pair<std::string, std::string>;  // (file, options), or (object key, "")
+    std::mutex programs_mutex;
+    std::map<Key, cl::Program> programs;
+    // Its own lock: making an object builds programs, under programs_mutex.
+    std::mutex objects_mutex;
+    std::map<std::string, std::shared_ptr<void>> objects;
+};
 
 /// The program of embedded kernel file `file` ("primitives.cl") built for `device` with the
 /// options "-cl-std=CL1.2 -w <defines>" (-w: no warnings on stderr). Thread-safe. A failed build
@@ -48,20 +76,19 @@ double compile_ms_total();
 /// device compile a kernel for its work-group size (PoCL compiles there, not in clBuildProgram).
 void add_compile_ms(double ms);
 
-namespace detail {
-std::shared_ptr<void> cached_object(const ClDevice& device, const std::string& key,
-                                    const std::function<std::shared_ptr<void>()>& make);
-}
+/// The object of `key` in the device's cache, made by make() the first time.
+std::shared_ptr<void> detail_cached_object(const ClDevice& device, const std::string& key,
+                                           const std::function<std::shared_ptr<void>()>& make);
 
-/// A set of kernels (a struct of cl::Kernel) that make() creates once per (context, device, type,
-/// key) and the process keeps: clCreateKernel for every kernel of every build cost each build
-/// its own kernel objects. A cl::Kernel carries its arguments and is not thread-safe, so a set
+/// A set of kernels (a struct of cl::Kernel) that make() creates once per (device, type, key) and
+/// the device keeps: clCreateKernel for every kernel of every build cost each build its own
+/// kernel objects. A cl::Kernel carries its arguments and is not thread-safe, so a set
 /// serves one caller at a time; kdray's builds and renders run one after another on the device's
 /// one in-order queue. Creating a set is thread-safe.
 template <class Set, class Make>
 Set& cached_kernels(const ClDevice& device, const std::string& key, Make&& make) {
     const std::string full_key = std::string(typeid(Set).name()) + "|" + key;
-    return *static_cast<Set*>(detail::cached_object(device, full_key, [&] {
+    return *static_cast<Set*>(detail_cached_object(device, full_key, [&] {
                                   return std::shared_ptr<void>(std::make_shared<Set>(make()));
                               }).get());
 }
