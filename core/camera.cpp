@@ -47,7 +47,9 @@ CameraRays::CameraRays(const Camera& camera, int width_, int height_)
 }
 
 KdRay CameraRays::ray(float px, float py) const {
-    return kd_camera_ray(&view_, px, py);
+    KdRay ray;
+    kd_camera_ray(&view_, px, py, &ray);
+    return ray;
 }
 
 Camera frame_bounds(const Aabb& bounds, float fov_y) {

@@ -97,7 +97,7 @@ KDRAY_HOT_INLINE void kd_area_light(const KdSceneView* scene, const KdView* view
     for (int a = 0; a < 3; ++a) shadow.dir[a] = to_light[a];
     shadow.tmin = 0.0f;
     shadow.tmax = distance - view->ray_epsilon;
-    if (kd_scene_occluded(scene, shadow)) return;
+    if (kd_scene_occluded(scene, &shadow)) return;
     /* Ke cos_light / (d^2 pdf), pdf = probability / area. */
     const kd_f32 scale = cos_light * (0.5f * twice_area) / (d2 * e->probability);
     KDRAY_GLOBAL const KdMaterial* light = scene->materials + scene->material_ids[e->triangle];

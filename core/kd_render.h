@@ -62,14 +62,15 @@ typedef struct KdSceneView {
 } KdSceneView;
 
 /* Nearest hit, and occlusion, in the scene with its triangle test. */
-KDRAY_HOT_INLINE KdHit kd_scene_closest(const KdSceneView* scene, KdRay ray) {
-    return kd_trace(scene->nodes, scene->leaf_indices, scene->triangles, scene->bounds, ray, 0,
-                    scene->intersect);
+KDRAY_HOT_INLINE void kd_scene_closest(const KdSceneView* scene, const KdRay* ray, KdHit* hit) {
+    kd_trace(scene->nodes, scene->leaf_indices, scene->triangles, scene->bounds, ray, 0,
+             scene->intersect, hit);
 }
-KDRAY_HOT_INLINE int kd_scene_occluded(const KdSceneView* scene, KdRay ray) {
-    return kd_trace(scene->nodes, scene->leaf_indices, scene->triangles, scene->bounds, ray, 1,
-                    scene->intersect)
-               .prim != KDRAY_NO_HIT;
+KDRAY_HOT_INLINE int kd_scene_occluded(const KdSceneView* scene, const KdRay* ray) {
+    KdHit hit;
+    kd_trace(scene->nodes, scene->leaf_indices, scene->triangles, scene->bounds, ray, 1,
+             scene->intersect, &hit);
+    return hit.prim != KDRAY_NO_HIT;
 }
 
 /* What one pixel produces. */
@@ -117,18 +118,16 @@ KDRAY_INLINE void kd_normalize3(kd_f32* a) {
 
 /* The ray through image position (px, py) in pixels, conventions.md's camera model, evaluated in
  * the same order as ../shared/peers/embree: d = normalize(f + (r * sx + u * sy)). */
-KDRAY_HOT_INLINE KdRay kd_camera_ray(const KdView* view, kd_f32 px, kd_f32 py) {
+KDRAY_HOT_INLINE void kd_camera_ray(const KdView* view, kd_f32 px, kd_f32 py, KdRay* ray) {
     const kd_f32 sx = KDRAY_SCREEN_X(view, px);
     const kd_f32 sy = KDRAY_SCREEN_Y(view, py);
-    KdRay ray;
     for (int a = 0; a < 3; ++a) {
-        ray.org[a] = view->origin[a];
-        ray.dir[a] = KDRAY_CAMERA_DIR(view, a, sx, sy);
+        ray->org[a] = view->origin[a];
+        ray->dir[a] = KDRAY_CAMERA_DIR(view, a, sx, sy);
     }
-    kd_normalize3(ray.dir);
-    ray.tmin = 0.0f;
-    ray.tmax = KDRAY_INF;
-    return ray;
+    kd_normalize3(ray->dir);
+    ray->tmin = 0.0f;
+    ray->tmax = KDRAY_INF;
 }
 
 /* x^y for x > 0, as 2^(y log2 x) on both sides: OpenCL's pow in PoCL (an extended-precision
@@ -244,19 +243,17 @@ typedef struct KdPendingRay {
     kd_u32 kind;  /* 0 primary, 1 reflection, 2 refraction */
 } KdPendingRay;
 
-KDRAY_INLINE KdPendingRay kd_pending(const kd_f32* org, const kd_f32* dir, const kd_f32* weight,
-                                     kd_u32 depth, kd_u32 kind) {
-    KdPendingRay r;
+KDRAY_INLINE void kd_pending(const kd_f32* org, const kd_f32* dir, const kd_f32* weight,
+                             kd_u32 depth, kd_u32 kind, KdPendingRay* r) {
     for (int a = 0; a < 3; ++a) {
-        r.ray.org[a] = org[a];
-        r.ray.dir[a] = dir[a];
-        r.weight[a] = weight[a];
+        r->ray.org[a] = org[a];
+        r->ray.dir[a] = dir[a];
+        r->weight[a] = weight[a];
     }
-    r.ray.tmin = 0.0f;
-    r.ray.tmax = KDRAY_INF;
-    r.depth = depth;
-    r.kind = kind;
-    return r;
+    r->ray.tmin = 0.0f;
+    r->ray.tmax = KDRAY_INF;
+    r->depth = depth;
+    r->kind = kind;
 }
 
 /* The lights that shine on a frame's surfaces: the render file's, which shine only with shadows
@@ -301,16 +298,14 @@ KDRAY_HOT_INLINE void kd_hit_point(const KdRay* ray, kd_f32 t, kd_f32* p) {
 }
 
 /* The shadow ray from p (normal n) toward a light `distance` away along to_light. */
-KDRAY_HOT_INLINE KdRay kd_shadow_ray(const KdView* view, const kd_f32* p, const kd_f32* n,
-                                     const kd_f32* to_light, kd_f32 distance) {
-    KdRay shadow;
+KDRAY_HOT_INLINE void kd_shadow_ray(const KdView* view, const kd_f32* p, const kd_f32* n,
+                                    const kd_f32* to_light, kd_f32 distance, KdRay* shadow) {
     for (int a = 0; a < 3; ++a) {
-        shadow.org[a] = p[a] + n[a] * view->ray_epsilon;
-        shadow.dir[a] = to_light[a];
+        shadow->org[a] = p[a] + n[a] * view->ray_epsilon;
+        shadow->dir[a] = to_light[a];
     }
-    shadow.tmin = 0.0f;
-    shadow.tmax = distance - view->ray_epsilon;
-    return shadow;
+    shadow->tmin = 0.0f;
+    shadow->tmax = distance - view->ray_epsilon;
 }
 
 /* What m reflects toward the eye (direction `dir` of the ray that arrived) of the irradiance a
@@ -365,9 +360,13 @@ KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* vi
         if (cos_l <= 0.0f) continue;
         if (light_count != 0u) {
             rays->shadow += 1u;
-            if (occluded ? (*occluded >> i) & 1u
-                         : kd_scene_occluded(scene, kd_shadow_ray(view, p, ng, to_light, distance)))
-                continue;
+            if (occluded) {
+                if ((*occluded >> i) & 1u) continue;
+            } else {
+                KdRay shadow;
+                kd_shadow_ray(view, p, ng, to_light, distance, &shadow);
+                if (kd_scene_occluded(scene, &shadow)) continue;
+            }
         }
         kd_reflected(m, diffuse, ns, dir, to_light, irradiance, cos_l, out);
     }
@@ -380,16 +379,20 @@ KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* vi
  * CPU device keeps in memory and a GPU in scratch). Its arithmetic is kd_trace_sample's for a
  * tree of one ray (weight 1, nothing pushed), so the two give identical colours. */
 KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdView* view,
-                                             KdRay primary, const KdHit* traced,
+                                             const KdRay* primary, const KdHit* traced,
                                              KDRAY_GLOBAL const kd_u32* occluded, kd_f32* rgb,
                                              KdRayCounts* rays, KdHit* first_hit,
                                              kd_f32* first_normal) {
     rays->primary += 1u;
-    const KdHit hit = traced ? *traced : kd_scene_closest(scene, primary);
+    KdHit hit;
+    if (traced)
+        hit = *traced;
+    else
+        kd_scene_closest(scene, primary, &hit);
     kd_f32 ng[3] = {0.0f, 0.0f, 0.0f};
     if (hit.prim != KDRAY_NO_HIT)
         kd_facing_normal(scene->triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE,
-                         primary.dir, ng);
+                         primary->dir, ng);
     if (first_hit) {
         *first_hit = hit;
         kd_set3(first_normal, ng[0], ng[1], ng[2]);
@@ -400,14 +403,14 @@ KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdV
     }
     KDRAY_GLOBAL const KdMaterial* m = scene->materials + scene->material_ids[hit.prim];
     kd_f32 p[3], ns[3], direct[3] = {0.0f, 0.0f, 0.0f};
-    kd_hit_point(&primary, hit.t, p);
+    kd_hit_point(primary, hit.t, p);
     kd_shading_normal(scene, hit, ng, ns);
     const kd_f32 surface = 1.0f - m->transmit_fraction;
     if (surface > 0.0f)
-        kd_direct_light(scene, view, m, hit, p, ng, ns, primary.dir, occluded, direct, rays);
+        kd_direct_light(scene, view, m, hit, p, ng, ns, primary->dir, occluded, direct, rays);
     kd_f32 emitted[3] = {0.0f, 0.0f, 0.0f};
     if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS))
-        kd_emitted(scene->triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE, m, primary.dir,
+        kd_emitted(scene->triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE, m, primary->dir,
                    emitted);
     for (int c = 0; c < 3; ++c) rgb[c] = 0.0f + (emitted[c] + surface * direct[c]);
 }
@@ -417,10 +420,10 @@ KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdV
  * likewise the shadow rays from that hit (`occluded`, as kd_direct_light reads it). The pending
  * stack holds at most one ray per level: each traced ray pushes at most two, one of which is
  * traced next. */
-KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* view, KdRay primary,
-                                      const KdHit* traced, KDRAY_GLOBAL const kd_u32* occluded,
-                                      kd_f32* rgb, KdRayCounts* rays, KdHit* first_hit,
-                                      kd_f32* first_normal) {
+KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* view,
+                                      const KdRay* primary, const KdHit* traced,
+                                      KDRAY_GLOBAL const kd_u32* occluded, kd_f32* rgb,
+                                      KdRayCounts* rays, KdHit* first_hit, kd_f32* first_normal) {
     if (!KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFLECTION | KDRAY_EFFECT_REFRACTION)) {
         kd_trace_direct_sample(scene, view, primary, traced, occluded, rgb, rays, first_hit,
                                first_normal);
@@ -428,7 +431,7 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
     }
     KdPendingRay stack[KDRAY_MAX_BOUNCES + 1];
     const kd_f32 one[3] = {1.0f, 1.0f, 1.0f};
-    stack[0] = kd_pending(primary.org, primary.dir, one, 1u, 0u);
+    kd_pending(primary->org, primary->dir, one, 1u, 0u, &stack[0]);
     int pending = 1;
     kd_set3(rgb, 0.0f, 0.0f, 0.0f);
     while (pending > 0) {
@@ -439,7 +442,11 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
             rays->reflection += 1u;
         else
             rays->refraction += 1u;
-        const KdHit hit = r.kind == 0u && traced ? *traced : kd_scene_closest(scene, r.ray);
+        KdHit hit;
+        if (r.kind == 0u && traced)
+            hit = *traced;
+        else
+            kd_scene_closest(scene, &r.ray, &hit);
         kd_f32 ng[3] = {0.0f, 0.0f, 0.0f};
         KDRAY_GLOBAL const kd_f32* tri = scene->triangles;
         if (hit.prim != KDRAY_NO_HIT) {
@@ -506,14 +513,14 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
                 kd_refract(r.ray.dir, n, eta, cos_i, cos_t, dir);
                 for (int a = 0; a < 3; ++a) org[a] = p[a] - ng[a] * view->ray_epsilon;
                 kd_normalize3(dir);
-                stack[pending++] = kd_pending(org, dir, refract_w, r.depth + 1u, 2u);
+                kd_pending(org, dir, refract_w, r.depth + 1u, 2u, &stack[pending++]);
             }
         }
         if (KDRAY_FMAX(reflect_w[0], KDRAY_FMAX(reflect_w[1], reflect_w[2])) >
             KDRAY_MIN_PATH_WEIGHT) {
             kd_f32 org[3];
             for (int a = 0; a < 3; ++a) org[a] = p[a] + ng[a] * view->ray_epsilon;
-            stack[pending++] = kd_pending(org, reflect_dir, reflect_w, r.depth + 1u, 1u);
+            kd_pending(org, reflect_dir, reflect_w, r.depth + 1u, 1u, &stack[pending++]);
         }
     }
 }
@@ -527,30 +534,35 @@ KDRAY_INLINE kd_u32 kd_primary_rays_per_pixel(const KdView* view) {
 
 /* Primary ray `r` (< kd_primary_rays_per_pixel) of pixel (x, y): sample r, or the centre ray for
  * r == spp. */
-KDRAY_HOT_INLINE KdRay kd_primary_ray(const KdView* view, kd_u32 x, kd_u32 y, kd_u32 r) {
-    if (view->spp <= 1u || r == view->spp)
-        return kd_camera_ray(view, (kd_f32)x + 0.5f, (kd_f32)y + 0.5f);
+KDRAY_HOT_INLINE void kd_primary_ray(const KdView* view, kd_u32 x, kd_u32 y, kd_u32 r, KdRay* ray) {
+    if (view->spp <= 1u || r == view->spp) {
+        kd_camera_ray(view, (kd_f32)x + 0.5f, (kd_f32)y + 0.5f, ray);
+        return;
+    }
     const kd_u32 h = kd_hash(KDRAY_SAMPLE_KEY(view, x, y, r));
-    return kd_camera_ray(view, (kd_f32)x + kd_unit_float(h), (kd_f32)y + kd_unit_float(kd_hash(h)));
+    kd_camera_ray(view, (kd_f32)x + kd_unit_float(h), (kd_f32)y + kd_unit_float(kd_hash(h)), ray);
 }
 
 /* One pixel: spp samples, their mean colour, and the centre ray's hit for the AOV. `traced`,
  * when not 0, holds the hits of the pixel's primary rays, already traced: the hit of ray r at
  * traced[r * traced_stride]; `occluded`, when not 0, the blocked shadow rays from those hits
  * (kd_direct_light) at the same places. */
-KDRAY_HOT_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView* view, kd_u32 x,
-                                         kd_u32 y, KDRAY_GLOBAL const KdHit* traced,
-                                         KDRAY_GLOBAL const kd_u32* occluded,
-                                         kd_u32 traced_stride) {
+KDRAY_HOT_INLINE void kd_render_pixel(const KdSceneView* scene, const KdView* view, kd_u32 x,
+                                      kd_u32 y, KDRAY_GLOBAL const KdHit* traced,
+                                      KDRAY_GLOBAL const kd_u32* occluded, kd_u32 traced_stride,
+                                      KdPixel* pixel) {
     KdPixel out;
     kd_set3(out.rgb, 0.0f, 0.0f, 0.0f);
     out.rays.primary = out.rays.shadow = out.rays.reflection = out.rays.refraction = 0u;
     out.rays.area_shadow = 0u;
     if (view->spp > 1u) {
         /* The AOV's centre ray: an extra primary ray. */
-        const KdRay centre = kd_primary_ray(view, x, y, view->spp);
-        out.centre_hit =
-            traced ? traced[view->spp * traced_stride] : kd_scene_closest(scene, centre);
+        KdRay centre;
+        kd_primary_ray(view, x, y, view->spp, &centre);
+        if (traced)
+            out.centre_hit = traced[view->spp * traced_stride];
+        else
+            kd_scene_closest(scene, &centre, &out.centre_hit);
         out.rays.primary += 1u;
         kd_set3(out.normal, 0.0f, 0.0f, 0.0f);
         if (out.centre_hit.prim != KDRAY_NO_HIT) {
@@ -574,13 +586,15 @@ KDRAY_HOT_INLINE KdPixel kd_render_pixel(const KdSceneView* scene, const KdView*
             for (int c = 0; c < 3; ++c) out.rgb[c] += view->background[c];
             continue;
         }
-        kd_trace_sample(scene, view, kd_primary_ray(view, x, y, s), traced ? &hit : 0,
+        KdRay primary;
+        kd_primary_ray(view, x, y, s, &primary);
+        kd_trace_sample(scene, view, &primary, traced ? &hit : 0,
                         occluded ? occluded + s * traced_stride : 0, rgb, &out.rays,
                         view->spp == 1u ? &out.centre_hit : 0, out.normal);
         for (int c = 0; c < 3; ++c) out.rgb[c] += rgb[c];
     }
     for (int c = 0; c < 3; ++c) out.rgb[c] /= (kd_f32)view->spp;
-    return out;
+    *pixel = out;
 }
 
 #endif /* KDRAY_KD_RENDER_H */

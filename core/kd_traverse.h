@@ -37,6 +37,12 @@
  * array indexed by a variable cannot live in registers (on a GPU it goes to scratch memory). */
 #define KDRAY_PICK3(v, k) ((k) == 0 ? (v)[0] : ((k) == 1 ? (v)[1] : (v)[2]))
 
+/* Functions here and in the other shared headers hand back structs through an out pointer rather
+ * than return them: OpenCL C returns a struct through a hidden `noalias` pointer, and inlining
+ * such a call leaves llvm.experimental.noalias.scope.decl calls in the kernel, which Oclgrind
+ * 21.10 (the strict second implementation the tests run) cannot execute: the render kernel could
+ * not even be created there. */
+
 /* Per-ray constants of the watertight test (Woop, Benthin, Wald 2013, "Watertight Ray/Triangle
  * Intersection", JCGT 2(1)): the axis kz where the direction is largest becomes the ray's z, kx and
  * ky are swapped to keep the winding when dir[kz] < 0, and the shear maps the direction onto +z. */
@@ -49,31 +55,29 @@ typedef struct KdRayPrecomp {
     kd_f32 ox, oy, oz; /* org[kx], org[ky], org[kz] */
 } KdRayPrecomp;
 
-KDRAY_HOT_INLINE KdRayPrecomp kd_ray_precompute(KdRay ray) {
-    KdRayPrecomp p;
+KDRAY_HOT_INLINE void kd_ray_precompute(const KdRay* ray, KdRayPrecomp* p) {
     for (int a = 0; a < 3; ++a) {
-        p.org[a] = ray.org[a];
-        p.dir[a] = ray.dir[a];
-        p.inv_dir[a] = 1.0f / ray.dir[a];
+        p->org[a] = ray->org[a];
+        p->dir[a] = ray->dir[a];
+        p->inv_dir[a] = 1.0f / ray->dir[a];
     }
-    kd_f32 ax = KDRAY_FABS(ray.dir[0]), ay = KDRAY_FABS(ray.dir[1]), az = KDRAY_FABS(ray.dir[2]);
-    p.kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
-    p.kx = (p.kz + 1) % 3;
-    p.ky = (p.kx + 1) % 3;
-    if (KDRAY_PICK3(ray.dir, p.kz) < 0.0f) {
-        kd_i32 swap = p.kx;
-        p.kx = p.ky;
-        p.ky = swap;
+    kd_f32 ax = KDRAY_FABS(ray->dir[0]), ay = KDRAY_FABS(ray->dir[1]), az = KDRAY_FABS(ray->dir[2]);
+    p->kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    p->kx = (p->kz + 1) % 3;
+    p->ky = (p->kx + 1) % 3;
+    if (KDRAY_PICK3(ray->dir, p->kz) < 0.0f) {
+        kd_i32 swap = p->kx;
+        p->kx = p->ky;
+        p->ky = swap;
     }
-    const kd_f32 dx = KDRAY_PICK3(ray.dir, p.kx), dy = KDRAY_PICK3(ray.dir, p.ky),
-                 dz = KDRAY_PICK3(ray.dir, p.kz);
-    p.sx = dx / dz;
-    p.sy = dy / dz;
-    p.sz = 1.0f / dz;
-    p.ox = KDRAY_PICK3(ray.org, p.kx);
-    p.oy = KDRAY_PICK3(ray.org, p.ky);
-    p.oz = KDRAY_PICK3(ray.org, p.kz);
-    return p;
+    const kd_f32 dx = KDRAY_PICK3(ray->dir, p->kx), dy = KDRAY_PICK3(ray->dir, p->ky),
+                 dz = KDRAY_PICK3(ray->dir, p->kz);
+    p->sx = dx / dz;
+    p->sy = dy / dz;
+    p->sz = 1.0f / dz;
+    p->ox = KDRAY_PICK3(ray->org, p->kx);
+    p->oy = KDRAY_PICK3(ray->org, p->ky);
+    p->oz = KDRAY_PICK3(ray->org, p->kz);
 }
 
 /* The distance along the ray (org, dir) to the plane of triangle tri, in double where the device
@@ -241,20 +245,20 @@ typedef struct KdTraversalEntry {
  * builders never make a path deeper than that. Hits are accepted wherever they lie on the ray (a
  * triangle in a leaf may extend beyond it); the walk ends when the best hit is nearer than the next
  * node's entry. */
-KDRAY_HOT_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
-                                KDRAY_GLOBAL const kd_u32* leaf_indices,
-                                KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
-                                KdRay ray, int any_hit, kd_u32 intersect) {
-    KdHit hit;
-    hit.t = ray.tmax;
-    hit.prim = KDRAY_NO_HIT;
-    hit.u = 0.0f;
-    hit.v = 0.0f;
-    KdRayPrecomp p = kd_ray_precompute(ray);
-    kd_f32 tmin = ray.tmin, tmax = ray.tmax;
+KDRAY_HOT_INLINE void kd_trace(KDRAY_GLOBAL const KdNode* nodes,
+                               KDRAY_GLOBAL const kd_u32* leaf_indices,
+                               KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
+                               const KdRay* ray, int any_hit, kd_u32 intersect, KdHit* hit) {
+    hit->t = ray->tmax;
+    hit->prim = KDRAY_NO_HIT;
+    hit->u = 0.0f;
+    hit->v = 0.0f;
+    KdRayPrecomp p;
+    kd_ray_precompute(ray, &p);
+    kd_f32 tmin = ray->tmin, tmax = ray->tmax;
     if (!kd_clip_to_box(&p, bounds, bounds + 3, &tmin, &tmax)) {
-        hit.t = KDRAY_INF;
-        return hit;
+        hit->t = KDRAY_INF;
+        return;
     }
 
     KdTraversalEntry stack[KDRAY_MAX_DEPTH];
@@ -262,7 +266,7 @@ KDRAY_HOT_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
     kd_u32 node_index = 0;
     for (;;) {
         /* Stop when the best hit lies before this node. */
-        if (hit.t < tmin) break;
+        if (hit->t < tmin) break;
         KdNode node = nodes[node_index];
         if (!kd_node_is_leaf(node)) {
             /* Inner node: visit the child on the origin's side first, the other if the ray
@@ -306,9 +310,9 @@ KDRAY_HOT_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
             const kd_u32 id = leaf_indices[offset + i];
             KDRAY_GLOBAL const kd_f32* tri = triangles + (size_t)id * KDRAY_FLOATS_PER_TRIANGLE;
             const int new_best = KDRAY_USE_MOLLER(intersect)
-                                     ? kd_intersect_triangle_moller(&p, tri, id, ray.tmin, &hit)
-                                     : kd_intersect_triangle(&p, tri, id, ray.tmin, &hit);
-            if (new_best && any_hit) return hit;
+                                     ? kd_intersect_triangle_moller(&p, tri, id, ray->tmin, hit)
+                                     : kd_intersect_triangle(&p, tri, id, ray->tmin, hit);
+            if (new_best && any_hit) return;
         }
         if (stack_size == 0) break;
         --stack_size;
@@ -316,24 +320,24 @@ KDRAY_HOT_INLINE KdHit kd_trace(KDRAY_GLOBAL const KdNode* nodes,
         tmin = stack[stack_size].tmin;
         tmax = stack[stack_size].tmax;
     }
-    if (hit.prim == KDRAY_NO_HIT) hit.t = KDRAY_INF;
-    return hit;
+    if (hit->prim == KDRAY_NO_HIT) hit->t = KDRAY_INF;
 }
 
-KDRAY_HOT_INLINE KdHit kd_trace_closest(KDRAY_GLOBAL const KdNode* nodes,
-                                        KDRAY_GLOBAL const kd_u32* leaf_indices,
-                                        KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
-                                        KdRay ray) {
-    return kd_trace(nodes, leaf_indices, triangles, bounds, ray, 0, KDRAY_INTERSECT_WATERTIGHT);
+KDRAY_HOT_INLINE void kd_trace_closest(KDRAY_GLOBAL const KdNode* nodes,
+                                       KDRAY_GLOBAL const kd_u32* leaf_indices,
+                                       KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
+                                       const KdRay* ray, KdHit* hit) {
+    kd_trace(nodes, leaf_indices, triangles, bounds, ray, 0, KDRAY_INTERSECT_WATERTIGHT, hit);
 }
 
 /* 1 when anything blocks the ray within [tmin, tmax). Both helpers use the watertight test. */
 KDRAY_HOT_INLINE int kd_trace_occluded(KDRAY_GLOBAL const KdNode* nodes,
                                        KDRAY_GLOBAL const kd_u32* leaf_indices,
                                        KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
-                                       KdRay ray) {
-    return kd_trace(nodes, leaf_indices, triangles, bounds, ray, 1, KDRAY_INTERSECT_WATERTIGHT)
-               .prim != KDRAY_NO_HIT;
+                                       const KdRay* ray) {
+    KdHit hit;
+    kd_trace(nodes, leaf_indices, triangles, bounds, ray, 1, KDRAY_INTERSECT_WATERTIGHT, &hit);
+    return hit.prim != KDRAY_NO_HIT;
 }
 
 #endif /* KDRAY_KD_TRAVERSE_H */

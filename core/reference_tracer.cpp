@@ -77,7 +77,9 @@ TraceInput trace_input(const KdTree& tree, const Scene& scene) {
 
 KdHit trace_one(const TraceInput& in, const KdRay& ray) {
     if (in.empty) return KdHit{INFINITY, KDRAY_NO_HIT, 0.0f, 0.0f};
-    return kd_trace_closest(in.nodes, in.leaf_indices, in.triangles, in.bounds, ray);
+    KdHit hit;
+    kd_trace_closest(in.nodes, in.leaf_indices, in.triangles, in.bounds, &ray, &hit);
+    return hit;
 }
 
 /// Rays per work item: large enough that the atomic counter is never contended, small enough that
@@ -148,8 +150,8 @@ FrameResult render_reference(const KdTree& tree, const Scene& scene, const Rende
                     counts[i].primary = view.spp;
                     continue;
                 }
-                const KdPixel p =
-                    kd_render_pixel(&scene_view, &view, x, kd_u32(y), nullptr, nullptr, 0);
+                KdPixel p;
+                kd_render_pixel(&scene_view, &view, x, kd_u32(y), nullptr, nullptr, 0, &p);
                 frame.hits.hits[i] = p.centre_hit;
                 if (inputs.normals) frame.hits.normals[i] = {p.normal[0], p.normal[1], p.normal[2]};
                 for (int c = 0; c < 3; ++c) frame.image.rgb[3 * i + c] = p.rgb[c];

@@ -212,8 +212,9 @@ int count_disagreements(const KdTree& tree, const Scene& scene, const std::vecto
                              tree.bounds.hi.x, tree.bounds.hi.y, tree.bounds.hi.z};
     int bad = 0;
     for (const KdRay& ray : rays) {
-        const KdHit got = kd_trace_closest(tree.nodes.data(), tree.leaf_indices.data(),
-                                           scene.triangles.data(), bounds, ray);
+        KdHit got;
+        kd_trace_closest(tree.nodes.data(), tree.leaf_indices.data(), scene.triangles.data(),
+                         bounds, &ray, &got);
         if (!hits_agree(got, brute_force_closest(scene, ray))) ++bad;
     }
     return bad;
@@ -284,7 +285,8 @@ KdHit brute_force_closest(const Scene& scene, const KdRay& ray) {
     best.t = INFINITY;
     best.prim = KDRAY_NO_HIT;
     best.u = best.v = 0;
-    KdRayPrecomp pre = kd_ray_precompute(ray);
+    KdRayPrecomp pre;
+    kd_ray_precompute(&ray, &pre);
     for (std::size_t i = 0; i < scene.triangle_count(); ++i)
         kd_intersect_triangle(&pre, &scene.triangles[i * KDRAY_FLOATS_PER_TRIANGLE], kd_u32(i),
                               ray.tmin, &best);
@@ -302,7 +304,8 @@ AovAgreement aov_against_brute_force(const HitBuffer& aov, const Scene& scene, c
     AovAgreement result;
     for (int y = 0; y < aov.height; ++y)
         for (int x = 0; x < aov.width; ++x) {
-            const KdRay ray = kd_camera_ray(&view, float(x) + 0.5f, float(y) + 0.5f);
+            KdRay ray;
+            kd_camera_ray(&view, float(x) + 0.5f, float(y) + 0.5f, &ray);
             KdHit expected = brute_force_closest(scene, ray);
             expected.t = scene.frame.scene_length(expected.t);
             result.hits += expected.prim != KDRAY_NO_HIT;

@@ -27,7 +27,8 @@ KdHit no_hit(float tmax = INFINITY) {
 
 /// One triangle against one ray, with [tmin, tmax) taken from the ray as the tracer does.
 KdHit intersect(const std::vector<float>& tri, const KdRay& ray) {
-    KdRayPrecomp p = kd_ray_precompute(ray);
+    KdRayPrecomp p;
+    kd_ray_precompute(&ray, &p);
     KdHit hit = no_hit(ray.tmax);
     kd_intersect_triangle(&p, tri.data(), 0, ray.tmin, &hit);
     return hit;
@@ -51,7 +52,8 @@ struct Target {
 /// Every triangle the ray hits, each tested on its own (not just the nearest).
 std::vector<kd_u32> all_hits(const Mesh& mesh, const KdRay& ray) {
     std::vector<kd_u32> ids;
-    KdRayPrecomp p = kd_ray_precompute(ray);
+    KdRayPrecomp p;
+    kd_ray_precompute(&ray, &p);
     for (std::size_t i = 0; i < mesh.count(); ++i) {
         KdHit hit = no_hit(ray.tmax);
         if (kd_intersect_triangle(&p, &mesh.triangles[i * KDRAY_FLOATS_PER_TRIANGLE], kd_u32(i),
@@ -119,7 +121,8 @@ int sweep(const Mesh& mesh, const std::vector<Target>& targets, Vec3 normal, flo
             const KdRay ray = make_ray(org, target.point - org);
             ++shot;
             const std::vector<kd_u32> hits = all_hits(mesh, ray);
-            KdRayPrecomp p = kd_ray_precompute(ray);
+            KdRayPrecomp p;
+            kd_ray_precompute(&ray, &p);
             KdHit best = no_hit();
             for (std::size_t i = 0; i < mesh.count(); ++i)
                 kd_intersect_triangle(&p, &mesh.triangles[i * KDRAY_FLOATS_PER_TRIANGLE], kd_u32(i),
@@ -349,7 +352,9 @@ TEST_CASE("the hit must lie in [tmin, best)") {
     CHECK(intersect(tri, make_ray(org, -dir)).prim == KDRAY_NO_HIT);
 
     // A nearer hit already found is kept.
-    KdRayPrecomp p = kd_ray_precompute(make_ray(org, dir));
+    const KdRay p_ray = make_ray(org, dir);
+    KdRayPrecomp p;
+    kd_ray_precompute(&p_ray, &p);
     KdHit best{1.5f, 42, 0.0f, 0.0f};
     CHECK(kd_intersect_triangle(&p, tri.data(), 0, 0.0f, &best) == 0);
     CHECK(best.prim == 42);

@@ -86,7 +86,8 @@ TEST_CASE("opencl render: centre hits equal brute force and the reference on the
         for (int y = 0; y < settings.height; ++y)
             for (int x = 0; x < settings.width; ++x) {
                 const std::size_t i = std::size_t(y) * settings.width + x;
-                const KdRay ray = kd_camera_ray(&inputs.view, float(x) + 0.5f, float(y) + 0.5f);
+                KdRay ray;
+                kd_camera_ray(&inputs.view, float(x) + 0.5f, float(y) + 0.5f, &ray);
                 const KdHit want = test::brute_force_closest(s.scene, ray);
                 hits += want.prim != KDRAY_NO_HIT;
                 against_brute += !test::hits_agree(device.hits.hits[i], want);
@@ -398,7 +399,8 @@ TEST_CASE("opencl render: distances on needles within 4 ulps, one ray at a time 
         for (int y = 0; y < settings.height; ++y)
             for (int x = 0; x < settings.width; ++x) {
                 const KdHit& got = device.hits.hits[std::size_t(y) * settings.width + x];
-                const KdRay ray = kd_camera_ray(&inputs.view, float(x) + 0.5f, float(y) + 0.5f);
+                KdRay ray;
+                kd_camera_ray(&inputs.view, float(x) + 0.5f, float(y) + 0.5f, &ray);
                 const KdHit want = test::brute_force_closest(scene, ray);
                 other_triangle += got.prim != want.prim;
                 if (want.prim == KDRAY_NO_HIT || got.prim != want.prim) continue;

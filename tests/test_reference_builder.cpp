@@ -32,8 +32,10 @@ std::string joined(const std::vector<std::string>& errors) {
 KdHit trace(const KdTree& tree, const Scene& scene, const KdRay& ray) {
     const float bounds[6] = {tree.bounds.lo.x, tree.bounds.lo.y, tree.bounds.lo.z,
                              tree.bounds.hi.x, tree.bounds.hi.y, tree.bounds.hi.z};
-    return kd_trace_closest(tree.nodes.data(), tree.leaf_indices.data(), scene.triangles.data(),
-                            bounds, ray);
+    KdHit hit;
+    kd_trace_closest(tree.nodes.data(), tree.leaf_indices.data(), scene.triangles.data(), bounds,
+                     &ray, &hit);
+    return hit;
 }
 
 /// Traces `count` rays through the tree and by brute force and checks them ray by ray, naming

@@ -60,13 +60,16 @@ bool use_packets(const ClDevice& device, kd_u32 intersect, RenderInputs::Packets
 /// frame_000, 1024x768 primary rays, 2 cores, medians of 5).
 constexpr std::size_t kTileWidth = 8, kTileHeight = 8;
 
-/// Build options of the render program. Correctly rounded division and square root, where the
-/// device offers them, make the device's camera rays and normals round as the host's do (a GPU's
-/// default single-precision divide and sqrt may be off by an ulp or more); a CPU device rounds
-/// correctly either way. Nothing that changes float results (fast or relaxed math) is used.
-std::string render_options(const ClDevice& device, kd_u32 effects, kd_u32 intersect) {
-    std::string options = "-DKDRAY_COMPILED_EFFECTS=" + std::to_string(effects) +
-                          " -DKDRAY_COMPILED_INTERSECT=" + std::to_string(intersect);
+/// Build options of the render program: its effects, its triangle test, and whether it holds the
+/// packet kernels (only where the choice uses them: CPU devices). Correctly rounded division and
+/// square root, where the device offers them, make the device's camera rays and normals round as
+/// the host's do (a GPU's default single-precision divide and sqrt may be off by an ulp or more);
+/// a CPU device rounds correctly either way. Nothing that changes float results (fast or relaxed
+/// math) is used.
+std::string render_options(const ClDevice& device, const OpenClRenderChoice& choice) {
+    std::string options = "-DKDRAY_COMPILED_EFFECTS=" + std::to_string(choice.effects) +
+                          " -DKDRAY_COMPILED_INTERSECT=" + std::to_string(choice.intersect) +
+                          " -DKDRAY_COMPILED_PACKETS=" + (choice.packets ? "1" : "0");
     cl_device_fp_config fp = 0;
     if (clGetDeviceInfo(device.device()(), CL_DEVICE_SINGLE_FP_CONFIG, sizeof(fp), &fp, nullptr) ==
             CL_SUCCESS &&
@@ -186,8 +189,7 @@ OpenClRenderChoice choose_opencl_render(const ClDevice& device, const RenderInpu
 }
 
 OpenClRenderPlan plan_opencl_render(ClDevice& device, const OpenClRenderChoice& choice) {
-    const cl::Program program = cached_program(
-        device, "render.cl", render_options(device, choice.effects, choice.intersect));
+    const cl::Program program = cached_program(device, "render.cl", render_options(device, choice));
     OpenClRenderPlan plan;
     plan.choice = choice;
     plan.pixel = make_kernel(program, choice.pixel_kernel.c_str());

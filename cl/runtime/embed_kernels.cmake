@@ -4,7 +4,9 @@
 cmake_minimum_required(VERSION 3.25)
 
 # A kernel's `#include "core/..."` lines are replaced by the header's text, each piece wrapped in
-# #line markers so that an OpenCL compile error names the right file and line. Run as:
+# #line markers so that an OpenCL compile error names the right file and line. A header is inlined
+# at its first #include only (later ones are dropped), whatever #if surrounds it: a header that a
+# kernel includes conditionally must also be included unconditionally before. Run as:
 #   cmake -DSOURCE_ROOT=<repo> -DOUTPUT=<file.cpp> -DKERNELS="a.cl|b.cl" -P embed_kernels.cmake
 
 # Returns the text of `file` (relative to SOURCE_ROOT) with its quoted includes inlined, once each.

@@ -64,8 +64,8 @@ KDRAY_INLINE float16 kd_packet_pick(int16 k, __global const float* c) {
  * packet's distances are the single ray's bit for bit; `fallback` elsewhere. Only lanes whose ray
  * passes inside the triangle with a poorly conditioned float t get here (kd_float_t_condition),
  * which is rare on ordinary meshes. */
-KDRAY_INLINE float16 kd_packet_plane_distance(const KdPacket* p, __global const float* tri, int16 lanes,
-                                        float16 fallback) {
+KDRAY_INLINE float16 kd_packet_plane_distance(const KdPacket* p, __global const float* tri,
+                                              int16 lanes, float16 fallback) {
     float t[16], o[3][16], d[3][16];
     int in[16];
     vstore16(fallback, 0, t);

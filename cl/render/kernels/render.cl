@@ -12,38 +12,50 @@
  *   kd_shade_traced_pixels   one work-item per pixel of one sample whose hit is in that buffer,
  *                            shaded where no reflection or refraction follows
  *
+ * The packet kernels and kd_shade_traced_pixels exist only in programs built with
+ * -DKDRAY_COMPILED_PACKETS=1 (CPU devices, opencl_renderer.cpp): a packet work-item holds 35-37 KB
+ * of private arrays, most of the program, which a GPU, running one ray per lane, never launches.
+ *
  * Every kernel takes the tree's buffers (nodes, leaf_indices, triangles) first and a
  * KdRenderLaunch record (core/kd_shared.h: the view, the tree's box, the launch's rows and
  * outputs); those that shade also take the frame's read-only arrays in one buffer, scene_data,
  * with the KdSceneLayout record of where each lies; then the buffers the kernel writes. */
-#include "cl/render/kernels/packet_traverse.cl"
 #include "core/kd_render.h"
+/* After kd_render.h: the embedding inlines a header's text at its first #include only
+ * (embed_kernels.cmake), so the headers that packet_traverse.cl shares must come in outside the
+ * #if. */
+#ifndef KDRAY_COMPILED_PACKETS
+#error "render.cl is built with -DKDRAY_COMPILED_PACKETS=0 or 1 (opencl_renderer.cpp)"
+#endif
+#if KDRAY_COMPILED_PACKETS
+#include "cl/render/kernels/packet_traverse.cl"
+#endif
 
 /* The scene view the kernels read: the tree's buffers, the launch's box, and the frame's arrays
  * at their byte offsets in scene_data. vertex_normals is 0 where the scene has none (flat
  * shading). */
-KDRAY_INLINE KdSceneView kd_scene_view(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
-                                 __global const float* triangles, __global const uchar* scene_data,
-                                 const KdSceneLayout* layout, const KdRenderLaunch* launch) {
-    KdSceneView scene;
-    scene.nodes = nodes;
-    scene.leaf_indices = leaf_indices;
-    scene.triangles = triangles;
-    scene.vertex_normals = layout->has_vertex_normals
-                               ? (__global const float*)(scene_data + layout->vertex_normals)
-                               : 0;
-    scene.material_ids = (__global const kd_u32*)(scene_data + layout->material_ids);
-    scene.materials = (__global const KdMaterial*)(scene_data + layout->materials);
-    scene.lights = (__global const KdLight*)(scene_data + layout->lights);
-    scene.emitters = (__global const KdEmitter*)(scene_data + layout->emitters);
-    scene.texcoords = (__global const float*)(scene_data + layout->texcoords);
-    scene.textures = (__global const KdTexture*)(scene_data + layout->textures);
-    scene.texels = (__global const float*)(scene_data + layout->texels);
-    for (int i = 0; i < 6; ++i) scene.bounds[i] = launch->bounds[i];
-    scene.intersect = KDRAY_COMPILED_INTERSECT;
-    return scene;
+KDRAY_INLINE void kd_scene_view(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
+                                __global const float* triangles, __global const uchar* scene_data,
+                                const KdSceneLayout* layout, const KdRenderLaunch* launch,
+                                KdSceneView* scene) {
+    scene->nodes = nodes;
+    scene->leaf_indices = leaf_indices;
+    scene->triangles = triangles;
+    scene->vertex_normals = layout->has_vertex_normals
+                                ? (__global const float*)(scene_data + layout->vertex_normals)
+                                : 0;
+    scene->material_ids = (__global const kd_u32*)(scene_data + layout->material_ids);
+    scene->materials = (__global const KdMaterial*)(scene_data + layout->materials);
+    scene->lights = (__global const KdLight*)(scene_data + layout->lights);
+    scene->emitters = (__global const KdEmitter*)(scene_data + layout->emitters);
+    scene->texcoords = (__global const float*)(scene_data + layout->texcoords);
+    scene->textures = (__global const KdTexture*)(scene_data + layout->textures);
+    scene->texels = (__global const float*)(scene_data + layout->texels);
+    for (int i = 0; i < 6; ++i) scene->bounds[i] = launch->bounds[i];
+    scene->intersect = KDRAY_COMPILED_INTERSECT;
 }
 
+#if KDRAY_COMPILED_PACKETS
 /* kd_hash and kd_unit_float of core/kd_render.h, per lane. */
 KDRAY_INLINE uint16 kd_hash16(uint16 x) {
     KDRAY_LOWBIAS32(x);
@@ -56,7 +68,7 @@ KDRAY_INLINE float16 kd_unit_float16(uint16 h) {
 /* Primary ray r of pixels (x, y), one per lane: kd_primary_ray and kd_camera_ray of core/
  * kd_render.h through the same macros, so that each lane's ray is the scalar one bit for bit. */
 KDRAY_INLINE KdPacketRays kd_primary_packet(const KdView* view, uint16 x, uint16 y, kd_u32 r,
-                                      int16 valid) {
+                                            int16 valid) {
     float16 px = convert_float16(x) + 0.5f, py = convert_float16(y) + 0.5f;
     if (view->spp > 1u && r != view->spp) {
         const uint16 h = kd_hash16(KDRAY_SAMPLE_KEY(view, x, y, r));
@@ -132,8 +144,8 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
     /* With spp > 1, ray spp is the AOV's centre ray, which nothing shades. */
     if (launch.view.spp > 1u && r == launch.view.spp) return;
     const KdView v = launch.view;
-    const KdSceneView scene =
-        kd_scene_view(nodes, leaf_indices, triangles, scene_data, &layout, &launch);
+    KdSceneView scene;
+    kd_scene_view(nodes, leaf_indices, triangles, scene_data, &layout, &launch, &scene);
     /* Per lane (pixel (x0 + i % 4, row0 + i / 4)): its hit's point and geometric and shading
      * normals, as kd_trace_sample computes them. */
     kd_f32 p[KDRAY_PACKET_SIZE][3], ng[KDRAY_PACKET_SIZE][3], ns[KDRAY_PACKET_SIZE][3];
@@ -150,7 +162,8 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
         if (!inside[i]) continue;
         const KdHit hit = traced[at[i]];
         if (hit.prim == KDRAY_NO_HIT) continue;
-        const KdRay primary = kd_primary_ray(&v, xi, first_row + ri, r);
+        KdRay primary;
+        kd_primary_ray(&v, xi, first_row + ri, r, &primary);
         kd_facing_normal(triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE, primary.dir,
                          ng[i]);
         kd_shading_normal(&scene, hit, ng[i], ns[i]);
@@ -172,7 +185,8 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
             kd_f32 to_light[3], irradiance[3], distance;
             kd_light_at(&scene, &v, light_count, light, p[i], to_light, irradiance, &distance);
             if (kd_light_cosine(ng[i], ns[i], to_light) <= 0.0f) continue;
-            const KdRay shadow = kd_shadow_ray(&v, p[i], ng[i], to_light, distance);
+            KdRay shadow;
+            kd_shadow_ray(&v, p[i], ng[i], to_light, distance, &shadow);
             for (int a = 0; a < 3; ++a) {
                 org[a][i] = shadow.org[a];
                 dir[a][i] = shadow.dir[a];
@@ -199,6 +213,7 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
         if (inside[i]) occluded[at[i]] = blocked[i];
 }
 #endif
+#endif /* KDRAY_COMPILED_PACKETS */
 
 /* The work-item of pixel (get_global_id(0), first_row + get_global_id(1)), for both pixel kernels
  * below. direct_only: the pixel's one sample, whose primary hit is in traced, shaded by
@@ -216,8 +231,8 @@ KDRAY_HOT_INLINE void kd_pixel_work_item(
     const kd_u32 row = (kd_u32)get_global_id(1);
     if (x >= view->width || row >= rows) return;
     const kd_u32 y = launch->first_row + row;
-    const KdSceneView scene =
-        kd_scene_view(nodes, leaf_indices, triangles, scene_data, layout, launch);
+    KdSceneView scene;
+    kd_scene_view(nodes, leaf_indices, triangles, scene_data, layout, launch, &scene);
     const size_t in_launch = (size_t)row * view->width + x;
     __global const kd_u32* blocked =
         (outputs & KDRAY_RENDER_TRACED_SHADOWS) ? occluded + in_launch : 0;
@@ -226,12 +241,14 @@ KDRAY_HOT_INLINE void kd_pixel_work_item(
         const KdHit hit = traced[in_launch];
         pixel.rays.primary = pixel.rays.shadow = pixel.rays.reflection = pixel.rays.refraction = 0u;
         pixel.rays.area_shadow = 0u;
-        kd_trace_direct_sample(&scene, view, kd_primary_ray(view, x, y, 0u), &hit, blocked,
-                               pixel.rgb, &pixel.rays, &pixel.centre_hit, pixel.normal);
+        KdRay primary;
+        kd_primary_ray(view, x, y, 0u, &primary);
+        kd_trace_direct_sample(&scene, view, &primary, &hit, blocked, pixel.rgb, &pixel.rays,
+                               &pixel.centre_hit, pixel.normal);
     } else {
-        pixel = kd_render_pixel(&scene, view, x, y,
-                                (outputs & KDRAY_RENDER_TRACED_PRIMARY) ? traced + in_launch : 0,
-                                blocked, rows * view->width);
+        kd_render_pixel(&scene, view, x, y,
+                        (outputs & KDRAY_RENDER_TRACED_PRIMARY) ? traced + in_launch : 0, blocked,
+                        rows * view->width, &pixel);
     }
     const size_t i = (size_t)y * view->width + x;
     for (int c = 0; c < 3; ++c) rgb[3 * i + c] = pixel.rgb[c];
@@ -256,6 +273,7 @@ __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u
                        normals, ray_counts, traced, occluded, 0);
 }
 
+#if KDRAY_COMPILED_PACKETS
 /* kd_render_pixels for spp 1 with the primary hits traced, in a kernel without reflection and
  * refraction: kd_render_pixel's one sample and its shading, nothing else. */
 __kernel void kd_shade_traced_pixels(__global const KdNode* nodes,
@@ -269,3 +287,4 @@ __kernel void kd_shade_traced_pixels(__global const KdNode* nodes,
     kd_pixel_work_item(nodes, leaf_indices, triangles, scene_data, &layout, &launch, rgb, hits,
                        normals, ray_counts, traced, occluded, 1);
 }
+#endif /* KDRAY_COMPILED_PACKETS */
