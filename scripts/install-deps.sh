@@ -14,6 +14,8 @@ packages=(
     libstb-dev libtinyexr-dev  # the small image codec: scripts/device-bundle.sh, its tests
     libtinyobjloader-dev libcli11-dev nlohmann-json3-dev doctest-dev libspdlog-dev
     help2man bash-completion python3-jsonschema
+    oclgrind                                             # the strict second OpenCL implementation (tests label oclgrind)
+    clang-14 llvm-14 libclc-14 libclc-14-dev             # compile the kernels for NVIDIA and AMD targets (gpu_compile test)
 )
 for option in "$@"; do
     case "$option" in
