@@ -1,6 +1,7 @@
 #include "cl/render/scene_arrays.h"
 
 #include <cstdint>
+#include <cstring>
 #include <string>
 
 #include "cl/runtime/cl_error.h"
@@ -69,14 +70,26 @@ DeviceSceneArrays upload_scene_arrays(ClDevice& device, const SceneArrays& array
     std::size_t total = 0;
     out.layout = layout_scene_arrays(arrays, &total);
     out.buffer = device.allocate(total, "scene arrays");
-    for (const Section& s : kSections) {
-        const HostArray& a = arrays.*s.array;
-        if (a.bytes == 0) continue;
-        with_cl_context("uploading " + std::string(s.name), [&] {
-            device.queue().enqueueWriteBuffer(out.buffer, CL_FALSE, out.layout.*s.offset, a.bytes,
-                                              a.data);
-        });
-    }
+    if (total == 0) return out;
+    /* One mapped write of the whole buffer, not a write per section: a write into part of a
+     * buffer is a transfer of its own on a discrete GPU, and Oclgrind's uninitialised-value
+     * checker keeps only the last such write of a buffer (its shadow is reallocated to the
+     * written size), so every section but one read as uninitialised there. */
+    with_cl_context("uploading the scene arrays", [&] {
+        auto* base = static_cast<unsigned char*>(device.queue().enqueueMapBuffer(
+            out.buffer, CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0, total));
+        std::size_t end = 0;
+        for (const Section& s : kSections) {
+            const HostArray& a = arrays.*s.array;
+            const std::size_t at = out.layout.*s.offset;
+            if (a.bytes == 0) continue;
+            std::memset(base + end, 0, at - end); /* the alignment gap: defined bytes */
+            std::memcpy(base + at, a.data, a.bytes);
+            end = at + a.bytes;
+        }
+        std::memset(base + end, 0, total - end);
+        device.queue().enqueueUnmapMemObject(out.buffer, base);
+    });
     return out;
 }
 

@@ -49,8 +49,8 @@ SceneArrays frame_scene_arrays(const Scene& scene, const RenderInputs& inputs);
 /// must end within 4 GiB: a scene of tens of millions of triangles).
 KdSceneLayout layout_scene_arrays(const SceneArrays& arrays, std::size_t* total);
 
-/// The arrays in one new device buffer with their layout. The writes are not waited for: the
-/// host arrays must stay as they are until the device's queue has finished them.
+/// The arrays in one new device buffer with their layout, written through one mapping of the
+/// buffer (the host arrays may change once it returns).
 struct DeviceSceneArrays {
     cl::Buffer buffer;
     KdSceneLayout layout{};
