@@ -61,14 +61,22 @@ struct BuildContext {
     /// Makes `array` hold `count` elements of T, keeping its first `used`.
     template <class T>
     void reserve(DeviceArray& array, std::size_t count, std::size_t used, const std::string& what) {
-        memory.reserve(array, count * sizeof(T), used * sizeof(T), what);
+        memory.reserve(array, count * sizeof(T), used * sizeof(T), what, primitives);
     }
+    /// values into the array's first elements, through a buffer of exactly their size and a copy
+    /// kernel. A host write into part of a (recycled, larger) array would be simpler, but
+    /// Oclgrind 21.10 then forgets which of the array's other bytes kernels have written (it
+    /// resizes the buffer's initialisation record to the host write) and reports each later read
+    /// of them. (A buffer made with CL_MEM_COPY_HOST_PTR is not marked written there at all.)
     template <class T>
     void write(const DeviceArray& array, const std::vector<T>& values) {
+        const std::size_t bytes = values.size() * sizeof(T);
+        if (bytes == 0) return;
+        const cl::Buffer staging = device.allocate(bytes, "staged build data");
         with_cl_context("uploading build data", [&] {
-            queue.enqueueWriteBuffer(array.buffer(), CL_TRUE, 0, values.size() * sizeof(T),
-                                     values.data());
+            queue.enqueueWriteBuffer(staging, CL_TRUE, 0, bytes, values.data());
         });
+        primitives.copy(staging, array.buffer(), bytes);
     }
     cl_uint read_uint(const DeviceArray& array, std::size_t index);
 };

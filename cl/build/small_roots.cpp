@@ -16,12 +16,8 @@ void SmallRoots::make_scene_root(BuildContext& ctx, const TriangleBounds& triang
                                  const Aabb& bounds, BuildOutput& output) {
     const cl_uint n = triangles.count;
     reserve(ctx, 1, n);
-    with_cl_context("setting up the small root", [&] {
-        ctx.queue.enqueueCopyBuffer(triangles.ref_tri.buffer(), ref_tri.buffer(), 0, 0,
-                                    n * sizeof(cl_uint));
-        ctx.queue.enqueueCopyBuffer(triangles.ref_box.buffer(), ref_box.buffer(), 0, 0,
-                                    n * sizeof(KdBuildBox));
-    });
+    ctx.primitives.copy(triangles.ref_tri.buffer(), ref_tri.buffer(), n * sizeof(cl_uint));
+    ctx.primitives.copy(triangles.ref_box.buffer(), ref_box.buffer(), n * sizeof(KdBuildBox));
     ctx.primitives.fill(ref_root.buffer(), 0, n);
     ctx.write(roots, std::vector<KdSmallRoot>{{build_box(bounds), 0, n, 0, 0}});
     ctx.write(output.records,

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "cl/runtime/cl_error.h"
+#include "cl/runtime/primitives.h"
 
 namespace kdray {
 
@@ -73,13 +74,12 @@ DeviceMemory::~DeviceMemory() {
 }
 
 void DeviceMemory::reserve(DeviceArray& array, std::size_t bytes, std::size_t used,
-                           const std::string& what) {
+                           const std::string& what, ClPrimitives& primitives) {
     if (array.owner_ && bytes <= array.bytes_) return;
     DeviceArray grown = allocate(std::max(bytes, 2 * array.bytes_), what);
     if (used > 0)
-        with_cl_context("growing " + what, [&] {
-            device_.queue().enqueueCopyBuffer(array.buffer_, grown.buffer_, 0, 0, used);
-        });
+        with_cl_context("growing " + what,
+                        [&] { primitives.copy(array.buffer_, grown.buffer_, used); });
     array = std::move(grown);
 }
 

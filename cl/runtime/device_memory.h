@@ -22,6 +22,7 @@
 namespace kdray {
 
 class DeviceMemory;
+class ClPrimitives;
 
 /// A device buffer counted by its DeviceMemory while it lives. Move-only.
 class DeviceArray {
@@ -69,7 +70,8 @@ class DeviceMemory {
 
     /// Makes `array` hold at least `bytes`, keeping its first `used` bytes: grows to the larger of
     /// `bytes` and twice its size, so that appending level by level copies O(total) bytes.
-    void reserve(DeviceArray& array, std::size_t bytes, std::size_t used, const std::string& what);
+    void reserve(DeviceArray& array, std::size_t bytes, std::size_t used, const std::string& what,
+                 ClPrimitives& primitives);
 
     std::size_t current_bytes() const { return current_; }
     std::size_t peak_bytes() const { return peak_; }

@@ -11,7 +11,7 @@ namespace kdray {
 
 struct ClPrimitives::Kernels {
     cl::Kernel scan_chunks, scan_single, add_chunk_offsets, add_offsets_by_chunk, compact_by_flags;
-    cl::Kernel fill;
+    cl::Kernel fill, copy;
     cl::Kernel reduce_box_chunks, reduce_box_segments, count_box_chunks;
 };
 
@@ -25,6 +25,7 @@ ClPrimitives::ClPrimitives(ClDevice& device)
           k.add_offsets_by_chunk = make_kernel(program, "kd_add_chunk_offsets_by_chunk");
           k.compact_by_flags = make_kernel(program, "kd_compact_by_flags");
           k.fill = make_kernel(program, "kd_fill_uint");
+          k.copy = make_kernel(program, "kd_copy_uint");
           k.reduce_box_chunks = make_kernel(program, "kd_reduce_box_chunks");
           k.reduce_box_segments = make_kernel(program, "kd_reduce_box_segments");
           k.count_box_chunks = make_kernel(program, "kd_count_box_chunks");
@@ -68,6 +69,14 @@ void ClPrimitives::exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, s
 
 void ClPrimitives::fill(const cl::Buffer& out, cl_uint value, std::size_t n) {
     enqueue_kernel(device_.queue(), kernels_.fill, n, out, value, cl_uint(n));
+}
+
+void ClPrimitives::copy(const cl::Buffer& from, const cl::Buffer& to, std::size_t bytes) {
+    if (bytes % sizeof(cl_uint) != 0)
+        throw Error("internal: a device copy of " + std::to_string(bytes) +
+                    " bytes, not a whole number of 32-bit words");
+    const std::size_t n = bytes / sizeof(cl_uint);
+    enqueue_kernel(device_.queue(), kernels_.copy, n, from, to, cl_uint(n));
 }
 
 std::size_t ClPrimitives::compact(const cl::Buffer& values, const cl::Buffer& flags,

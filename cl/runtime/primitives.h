@@ -26,6 +26,12 @@ class ClPrimitives {
     /// reported every later read of one; the kernel is the same single pass.
     void fill(const cl::Buffer& out, cl_uint value, std::size_t n);
 
+    /// The first `bytes` (a multiple of 4) of `from` into `to`. A kernel rather than
+    /// clEnqueueCopyBuffer for the same reason as fill: Oclgrind 21.10 resizes a buffer's
+    /// initialisation record to the size of a host-side copy into it, so every later kernel write
+    /// past the copied part read back as uninitialised.
+    void copy(const cl::Buffer& from, const cl::Buffer& to, std::size_t bytes);
+
     /// Writes the values[k] with flags[k] (0 or 1) != 0 to out, in order, and returns how many
     /// (read back: it synchronises).
     std::size_t compact(const cl::Buffer& values, const cl::Buffer& flags, const cl::Buffer& out,

@@ -61,6 +61,12 @@ __kernel void kd_add_chunk_offsets_by_chunk(__global uint* out, uint n, uint chu
     if (i == 0) out[n] = offsets[chunks];
 }
 
+/* out[k] = in[k] for k < n: a device copy that Oclgrind tracks (see ClPrimitives::copy). */
+__kernel void kd_copy_uint(__global const uint* in, __global uint* out, uint n) {
+    const uint k = get_global_id(0);
+    if (k < n) out[k] = in[k];
+}
+
 /* out[k] = value for k < n. */
 __kernel void kd_fill_uint(__global uint* out, uint value, uint n) {
     const uint k = get_global_id(0);
