@@ -244,6 +244,12 @@ CASES = {
     "anim": ("anim", ["--quality", "medium"]),
     "reference-builder": ("coplanar", ["--builder", "reference"]),
     "reference-tracer": ("clusters", ["--tracer", "reference", "--quality", "high"]),
+    # A device with NVIDIA's limits (256 work-items a group, 48 KiB of local memory), and one
+    # with 32 KiB: the group sizes and local arrays kdray picks must fit both.
+    "nvidia-limits": ("effects", ["--small-stage", "per-level"],
+                      ["--max-wgsize", "256", "--local-mem-size", "49152"]),
+    "local-32k": ("clusters", ["--small-stage", "per-level"],
+                  ["--max-wgsize", "256", "--local-mem-size", "32768"]),
 }
 
 
@@ -257,7 +263,7 @@ def run(cmd, env=None, timeout=900):
 
 
 def check_case(kdray, work, name, built):
-    scene, options = CASES[name]
+    scene, options, *device_limits = CASES[name]
     objs, render_json = built[scene]
     base = [str(kdray), "render", *map(str, objs), "--camera", str(render_json), "--aov"]
     out = work / "out" / name
@@ -267,7 +273,7 @@ def check_case(kdray, work, name, built):
     if r.returncode != 0:
         return [f"reference render failed: {r.stderr.strip()}"]
     env = dict(os.environ)
-    runs = [("optimised", ["--data-races", "--check-api"], "")]
+    runs = [("optimised", ["--data-races", "--check-api", *sum(device_limits, [])], "")]
     for label, flags, build_options in runs:
         env["OCLGRIND_BUILD_OPTIONS"] = build_options
         got = out / label
