@@ -11,6 +11,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 exclude=()
+# Slurm and munge for the slurm_render test (about 15 s to install), so that it runs, not skips.
+scripts/install-deps.sh --slurm
 if [[ "${1:-}" == "--sanitize" ]]; then
     shift
     export KDRAY_BUILD_DIR=${KDRAY_BUILD_DIR:-build-asan}
