@@ -156,6 +156,13 @@ class RenderLog final : public RenderRunObserver {
             "effects: {}",
             frames, out_dir_, builder->description(), builder_quality, tracer->name(),
             effects_said_);
+        // The hits are as exact either way (to a near-tie of floats); said once, since a user
+        // comparing devices may ask why stats.json's exact_arithmetic differs.
+        if (tracer->exact_arithmetic() != "fp64")
+            spdlog::info(
+                "tracer {}: no fp64 (the device has none, or KDRAY_FORCE_NO_FP64 is set): the "
+                "triangle test's edge fallback and refined distance run in {} arithmetic",
+                tracer->name(), tracer->exact_arithmetic());
     }
 
     void frame_rendered(std::size_t done, std::size_t count,

@@ -19,10 +19,6 @@
 #define KDRAY_FMAX fmax
 #define KDRAY_FABS fabs
 #define KDRAY_INF INFINITY
-#ifdef cl_khr_fp64
-#pragma OPENCL EXTENSION cl_khr_fp64 : enable
-#define KDRAY_HAS_DOUBLE 1
-#endif
 #else
 #include <cmath>
 #define KDRAY_GLOBAL
@@ -30,8 +26,33 @@
 #define KDRAY_FMAX std::fmax
 #define KDRAY_FABS std::fabs
 #define KDRAY_INF INFINITY
-#define KDRAY_HAS_DOUBLE 1
 #endif
+
+/* The triangle test's two exact steps (the edge fallback and the refined distance) run in double
+ * where the device has it and in float-float arithmetic (core/kd_float_float.h) where it has not.
+ * KDRAY_DOUBLE_AVAILABLE: whether double code is compiled at all (always on the host, so host
+ * tests can run both paths side by side). KDRAY_EXACT_FP64: the path kd_intersect_triangle takes.
+ * -DKDRAY_FORCE_NO_FP64=1 makes a device with fp64 compile as one without (the renderer passes it
+ * when KDRAY_FORCE_NO_FP64 is set in the environment, to test the float-float path on PoCL). */
+#if defined(KDRAY_FORCE_NO_FP64) && KDRAY_FORCE_NO_FP64
+#define KDRAY_EXACT_FP64 0
+#ifdef KDRAY_DEVICE_CODE
+#define KDRAY_DOUBLE_AVAILABLE 0
+#else
+#define KDRAY_DOUBLE_AVAILABLE 1
+#endif
+#elif !defined(KDRAY_DEVICE_CODE) || defined(cl_khr_fp64)
+#define KDRAY_EXACT_FP64 1
+#define KDRAY_DOUBLE_AVAILABLE 1
+#else
+#define KDRAY_EXACT_FP64 0
+#define KDRAY_DOUBLE_AVAILABLE 0
+#endif
+#if KDRAY_DOUBLE_AVAILABLE && defined(KDRAY_DEVICE_CODE)
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#endif
+
+#include "core/kd_float_float.h"
 
 /* Component k (0, 1 or 2) of a three-float array by selects, not by a variable index: a private
  * array indexed by a variable cannot live in registers (on a GPU it goes to scratch memory). */
@@ -80,17 +101,18 @@ KDRAY_HOT_INLINE void kd_ray_precompute(const KdRay* ray, KdRayPrecomp* p) {
     p->oz = KDRAY_PICK3(ray->org, p->kz);
 }
 
-/* The distance along the ray (org, dir) to the plane of triangle tri, in double where the device
- * has it: the watertight test's t is a sum of products of the vertices in ray space, in which a
+/* The distance along the ray (org, dir) to the plane of triangle tri, exact to far more than a
+ * float: the watertight test's t is a sum of products of the vertices in ray space, in which a
  * far corner of a long thin triangle swamps the near ones (a 1e4-long needle: t off by 1.5e-4
- * relative). Here the plane's normal comes from the edges in double and t = n.(p0 - org) / n.dir,
- * exact to about 1e-12 relative whatever the triangle's shape, then rounded once to float. The
- * inside test stays the float one, so the test stays watertight. Without doubles (or when the
- * double plane is parallel to the ray), `fallback`, the float t. */
-KDRAY_HOT_INLINE kd_f32 kd_plane_distance(KDRAY_GLOBAL const kd_f32* tri, kd_f32 ox, kd_f32 oy,
-                                          kd_f32 oz, kd_f32 dx, kd_f32 dy, kd_f32 dz,
-                                          kd_f32 fallback) {
-#ifdef KDRAY_HAS_DOUBLE
+ * relative). Here the plane's normal comes from the edges and t = n.(p0 - org) / n.dir, exact to
+ * about 1e-12 relative whatever the triangle's shape, then rounded once to float. The inside test
+ * stays the float one, so the test stays watertight. `fp64` picks double (1) or float-float (0):
+ * both round the same near-exact value, so they agree but for a near-tie of floats. Where the
+ * plane is parallel to the ray (or, in float-float, a value overflows), `fallback`, the float t. */
+#if KDRAY_DOUBLE_AVAILABLE
+KDRAY_HOT_INLINE kd_f32 kd_plane_distance_fp64(KDRAY_GLOBAL const kd_f32* tri, kd_f32 ox, kd_f32 oy,
+                                               kd_f32 oz, kd_f32 dx, kd_f32 dy, kd_f32 dz,
+                                               kd_f32 fallback) {
     const double p0x = (double)tri[0], p0y = (double)tri[1], p0z = (double)tri[2];
     const double e1x = (double)tri[3] - p0x, e1y = (double)tri[4] - p0y, e1z = (double)tri[5] - p0z;
     const double e2x = (double)tri[6] - p0x, e2y = (double)tri[7] - p0y, e2z = (double)tri[8] - p0z;
@@ -100,16 +122,95 @@ KDRAY_HOT_INLINE kd_f32 kd_plane_distance(KDRAY_GLOBAL const kd_f32* tri, kd_f32
     const double to_plane =
         nx * (p0x - (double)ox) + ny * (p0y - (double)oy) + nz * (p0z - (double)oz);
     return (kd_f32)(to_plane / along);
-#else
-    (void)tri;
-    (void)ox;
-    (void)oy;
-    (void)oz;
-    (void)dx;
-    (void)dy;
-    (void)dz;
-    return fallback;
+}
 #endif
+
+/* One component of the float-float cross product: a1 b2 - a2 b1 of float-float a and b. */
+KDRAY_HOT_INLINE void kd_ff_cross_component(kd_f32 a1h, kd_f32 a1l, kd_f32 a2h, kd_f32 a2l,
+                                            kd_f32 b1h, kd_f32 b1l, kd_f32 b2h, kd_f32 b2l,
+                                            kd_f32* hi, kd_f32* lo) {
+    kd_f32 ph, pl, qh, ql;
+    kd_ff_mul(a1h, a1l, b2h, b2l, &ph, &pl);
+    kd_ff_mul(a2h, a2l, b1h, b1l, &qh, &ql);
+    kd_ff_add(ph, pl, -qh, -ql, hi, lo);
+}
+
+/* x . (ah + al, ...) of a float-float vector a and a float-float x, accumulated in float-float. */
+KDRAY_HOT_INLINE void kd_ff_dot3(const kd_f32* ah, const kd_f32* al, const kd_f32* xh,
+                                 const kd_f32* xl, kd_f32* hi, kd_f32* lo) {
+    kd_f32 sh, sl, ph, pl;
+    kd_ff_mul(ah[0], al[0], xh[0], xl[0], &sh, &sl);
+    kd_ff_mul(ah[1], al[1], xh[1], xl[1], &ph, &pl);
+    kd_ff_add(sh, sl, ph, pl, &sh, &sl);
+    kd_ff_mul(ah[2], al[2], xh[2], xl[2], &ph, &pl);
+    kd_ff_add(sh, sl, ph, pl, hi, lo);
+}
+
+KDRAY_HOT_INLINE kd_f32 kd_plane_distance_ff(KDRAY_GLOBAL const kd_f32* tri, kd_f32 ox, kd_f32 oy,
+                                             kd_f32 oz, kd_f32 dx, kd_f32 dy, kd_f32 dz,
+                                             kd_f32 fallback) {
+    /* Differences of two floats are exact as float-float pairs. */
+    kd_f32 e1h[3], e1l[3], e2h[3], e2l[3], th[3], tl[3];
+    const kd_f32 o[3] = {ox, oy, oz};
+    for (int a = 0; a < 3; ++a) {
+        kd_two_sum(tri[3 + a], -tri[a], &e1h[a], &e1l[a]);
+        kd_two_sum(tri[6 + a], -tri[a], &e2h[a], &e2l[a]);
+        kd_two_sum(tri[a], -o[a], &th[a], &tl[a]);
+    }
+    kd_f32 nh[3], nl[3];
+    kd_ff_cross_component(e1h[1], e1l[1], e1h[2], e1l[2], e2h[1], e2l[1], e2h[2], e2l[2], &nh[0],
+                          &nl[0]);
+    kd_ff_cross_component(e1h[2], e1l[2], e1h[0], e1l[0], e2h[2], e2l[2], e2h[0], e2l[0], &nh[1],
+                          &nl[1]);
+    kd_ff_cross_component(e1h[0], e1l[0], e1h[1], e1l[1], e2h[0], e2l[0], e2h[1], e2l[1], &nh[2],
+                          &nl[2]);
+    const kd_f32 dh[3] = {dx, dy, dz}, dl[3] = {0.0f, 0.0f, 0.0f};
+    kd_f32 along_h, along_l, to_h, to_l, t_h, t_l;
+    kd_ff_dot3(nh, nl, dh, dl, &along_h, &along_l);
+    if (along_h == 0.0f) return fallback;
+    kd_ff_dot3(nh, nl, th, tl, &to_h, &to_l);
+    kd_ff_div(to_h, to_l, along_h, along_l, &t_h, &t_l);
+    /* NaN or an infinity: a value left float's range; the float t is the better answer then. */
+    return KDRAY_FABS(t_h) < KDRAY_INF ? t_h : fallback;
+}
+
+KDRAY_HOT_INLINE kd_f32 kd_plane_distance_with(KDRAY_GLOBAL const kd_f32* tri, kd_f32 ox, kd_f32 oy,
+                                               kd_f32 oz, kd_f32 dx, kd_f32 dy, kd_f32 dz,
+                                               kd_f32 fallback, int fp64) {
+#if KDRAY_DOUBLE_AVAILABLE
+    if (fp64) return kd_plane_distance_fp64(tri, ox, oy, oz, dx, dy, dz, fallback);
+#else
+    (void)fp64;
+#endif
+    return kd_plane_distance_ff(tri, ox, oy, oz, dx, dy, dz, fallback);
+}
+
+/* kd_plane_distance_with the device's path (KDRAY_EXACT_FP64). */
+KDRAY_HOT_INLINE kd_f32 kd_plane_distance(KDRAY_GLOBAL const kd_f32* tri, kd_f32 ox, kd_f32 oy,
+                                          kd_f32 oz, kd_f32 dx, kd_f32 dy, kd_f32 dz,
+                                          kd_f32 fallback) {
+    return kd_plane_distance_with(tri, ox, oy, oz, dx, dy, dz, fallback, KDRAY_EXACT_FP64);
+}
+
+/* The watertight test's scaled barycentrics recomputed without rounding to zero: each is a
+ * difference of two products of floats, exact in double (48-bit products) and exact in sign in
+ * float-float (kd_ff_diff_of_products); both then round it once to float. An exact zero stays
+ * zero and a nonzero value keeps its sign, which is what makes the test watertight on edges. */
+KDRAY_HOT_INLINE void kd_exact_edges(kd_f32 ax, kd_f32 ay, kd_f32 bx, kd_f32 by, kd_f32 cx,
+                                     kd_f32 cy, int fp64, kd_f32* u, kd_f32* v, kd_f32* w) {
+#if KDRAY_DOUBLE_AVAILABLE
+    if (fp64) {
+        *u = (kd_f32)((double)cx * (double)by - (double)cy * (double)bx);
+        *v = (kd_f32)((double)ax * (double)cy - (double)ay * (double)cx);
+        *w = (kd_f32)((double)bx * (double)ay - (double)by * (double)ax);
+        return;
+    }
+#else
+    (void)fp64;
+#endif
+    *u = kd_ff_diff_of_products(cx, by, cy, bx);
+    *v = kd_ff_diff_of_products(ax, cy, ay, cx);
+    *w = kd_ff_diff_of_products(bx, ay, by, ax);
 }
 
 /* The condition of the watertight test's float t = (u az + v bz + w cz) / det, in units of t:
@@ -157,9 +258,11 @@ KDRAY_HOT_INLINE kd_f32 kd_float_t_condition(const KdRayPrecomp* p, kd_f32 a_x, 
  * that share it. A triangle with two equal corners is never hit; three distinct collinear corners
  * stop being collinear after rounding into ray space, which is why scenes collapse zero-area
  * triangles to a point when they are loaded (collapse_zero_area_triangles). Returns 1 on a new
- * best hit. */
-KDRAY_HOT_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL const kd_f32* tri,
-                                           kd_u32 id, kd_f32 tmin, KdHit* best) {
+ * best hit. `fp64`: the arithmetic of the exact steps, double (1) or float-float (0); the walk
+ * passes the device's (kd_intersect_triangle), host tests pass both. */
+KDRAY_HOT_INLINE int kd_intersect_triangle_with(const KdRayPrecomp* p,
+                                                KDRAY_GLOBAL const kd_f32* tri, kd_u32 id,
+                                                kd_f32 tmin, KdHit* best, int fp64) {
     /* Vertices relative to the ray origin, then sheared and scaled into ray space. The permuted
      * components are read straight from the triangle (a variable offset into global memory costs
      * nothing), so no private array is indexed by kx/ky/kz; the arithmetic is unchanged. */
@@ -171,18 +274,12 @@ KDRAY_HOT_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL c
     const kd_f32 bx = b_x - p->sx * b_z, by = b_y - p->sy * b_z;
     const kd_f32 cx = c_x - p->sx * c_z, cy = c_y - p->sy * c_z;
 
-    /* Scaled barycentrics; an exact zero is ambiguous in float and is recomputed in double, which
-     * is what makes the test watertight on edges. */
+    /* Scaled barycentrics; an exact zero is ambiguous in float and is recomputed exactly. */
     kd_f32 u = cx * by - cy * bx;
     kd_f32 v = ax * cy - ay * cx;
     kd_f32 w = bx * ay - by * ax;
-#ifdef KDRAY_HAS_DOUBLE
-    if (u == 0.0f || v == 0.0f || w == 0.0f) {
-        u = (kd_f32)((double)cx * (double)by - (double)cy * (double)bx);
-        v = (kd_f32)((double)ax * (double)cy - (double)ay * (double)cx);
-        w = (kd_f32)((double)bx * (double)ay - (double)by * (double)ax);
-    }
-#endif
+    if (u == 0.0f || v == 0.0f || w == 0.0f)
+        kd_exact_edges(ax, ay, bx, by, cx, cy, fp64, &u, &v, &w);
     if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return 0;
     const kd_f32 det = u + v + w;
     if (det == 0.0f) return 0;
@@ -196,8 +293,8 @@ KDRAY_HOT_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL c
     const kd_f32 t_error = KDRAY_T_ERROR_PER_CONDITION * condition;
     if (!(t_float + t_error >= tmin && t_float - t_error < best->t)) return 0;
     const kd_f32 t = condition > KDRAY_T_REFINE_CONDITION * KDRAY_FABS(t_float)
-                         ? kd_plane_distance(tri, p->org[0], p->org[1], p->org[2], p->dir[0],
-                                             p->dir[1], p->dir[2], t_float)
+                         ? kd_plane_distance_with(tri, p->org[0], p->org[1], p->org[2], p->dir[0],
+                                                  p->dir[1], p->dir[2], t_float, fp64)
                          : t_float;
     if (!(t >= tmin && t < best->t)) return 0;
     best->t = t;
@@ -205,6 +302,12 @@ KDRAY_HOT_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL c
     best->u = v * inv_det;
     best->v = w * inv_det;
     return 1;
+}
+
+/* kd_intersect_triangle_with the device's path (KDRAY_EXACT_FP64): what the walk calls. */
+KDRAY_HOT_INLINE int kd_intersect_triangle(const KdRayPrecomp* p, KDRAY_GLOBAL const kd_f32* tri,
+                                           kd_u32 id, kd_f32 tmin, KdHit* best) {
+    return kd_intersect_triangle_with(p, tri, id, tmin, best, KDRAY_EXACT_FP64);
 }
 
 /* The fast, non-watertight alternative and KDRAY_USE_MOLLER, which picks between the two. */

@@ -35,6 +35,7 @@ class ReferenceTracer final : public Tracer {
         return render_reference(built.tree, scene, inputs, threads_);
     }
     std::string name() const override { return "reference"; }
+    std::string exact_arithmetic() const override { return "fp64"; }
     bool computes_on_host() const override { return true; }
 
   private:

@@ -185,6 +185,7 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
         {"name", settings_.frame.name.pattern()},
         {"builder", builder.description()},
         {"tracer", tracer.name()},
+        {"exact_arithmetic", tracer.exact_arithmetic()},
         {"render_file", settings_.render_file},
         {"image", {{"width", render.width}, {"height", render.height}, {"spp", render.spp}}},
         {"max_depth", render.max_depth},

@@ -26,6 +26,9 @@ class Tracer {
                               const RenderInputs& inputs) = 0;
     /// For stats.json: "opencl" or "reference".
     virtual std::string name() const = 0;
+    /// For stats.json: the arithmetic of the triangle test's exact steps (the watertight edge
+    /// fallback, the refined distance), "fp64" or "float-float" (a device without double).
+    virtual std::string exact_arithmetic() const = 0;
     /// Whether traces run on the host's own cores (see TreeBuilder::computes_on_host).
     virtual bool computes_on_host() const = 0;
 };

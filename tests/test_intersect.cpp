@@ -1,7 +1,9 @@
 // test_intersect.cpp — the shared ray–triangle test of core/kd_traverse.h (Woop, Benthin, Wald
 // 2013, "Watertight Ray/Triangle Intersection", JCGT 2(1)): rays aimed exactly at the edges and
 // vertices of closed meshes never slip through, degenerate triangles are never hit, and distances
-// and barycentrics match closed forms on a known triangle.
+// and barycentrics match closed forms on a known triangle. The hard cases (edges, vertices,
+// needles) run through both arithmetics of the test's exact steps: double, and the float-float
+// that devices without fp64 use (core/kd_float_float.h).
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -25,12 +27,15 @@ KdHit no_hit(float tmax = INFINITY) {
     return KdHit{tmax, KDRAY_NO_HIT, 0.0f, 0.0f};
 }
 
+/// The arithmetics of the exact steps (kd_intersect_triangle_with's fp64): double, float-float.
+constexpr int kArithmetics[] = {1, 0};
+
 /// One triangle against one ray, with [tmin, tmax) taken from the ray as the tracer does.
-KdHit intersect(const std::vector<float>& tri, const KdRay& ray) {
+KdHit intersect(const std::vector<float>& tri, const KdRay& ray, int fp64 = KDRAY_EXACT_FP64) {
     KdRayPrecomp p;
     kd_ray_precompute(&ray, &p);
     KdHit hit = no_hit(ray.tmax);
-    kd_intersect_triangle(&p, tri.data(), 0, ray.tmin, &hit);
+    kd_intersect_triangle_with(&p, tri.data(), 0, ray.tmin, &hit, fp64);
     return hit;
 }
 
@@ -50,14 +55,14 @@ struct Target {
 };
 
 /// Every triangle the ray hits, each tested on its own (not just the nearest).
-std::vector<kd_u32> all_hits(const Mesh& mesh, const KdRay& ray) {
+std::vector<kd_u32> all_hits(const Mesh& mesh, const KdRay& ray, int fp64) {
     std::vector<kd_u32> ids;
     KdRayPrecomp p;
     kd_ray_precompute(&ray, &p);
     for (std::size_t i = 0; i < mesh.count(); ++i) {
         KdHit hit = no_hit(ray.tmax);
-        if (kd_intersect_triangle(&p, &mesh.triangles[i * KDRAY_FLOATS_PER_TRIANGLE], kd_u32(i),
-                                  ray.tmin, &hit))
+        if (kd_intersect_triangle_with(&p, &mesh.triangles[i * KDRAY_FLOATS_PER_TRIANGLE],
+                                       kd_u32(i), ray.tmin, &hit, fp64))
             ids.push_back(kd_u32(i));
     }
     return ids;
@@ -106,7 +111,7 @@ void make_grid(int n, Vec3 origin, Vec3 e1, Vec3 e2, Mesh& mesh, std::vector<Tar
 /// and that it lies at the target (t = 1, since the direction is target - origin). Returns the
 /// number of rays shot.
 int sweep(const Mesh& mesh, const std::vector<Target>& targets, Vec3 normal, float distance,
-          int rays_per_target, std::uint32_t seed) {
+          int rays_per_target, std::uint32_t seed, int fp64) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> side(-1.0f, 1.0f);
     int shot = 0, reported = 0;
@@ -120,13 +125,13 @@ int sweep(const Mesh& mesh, const std::vector<Target>& targets, Vec3 normal, flo
             const Vec3 org = target.point + offset * distance;
             const KdRay ray = make_ray(org, target.point - org);
             ++shot;
-            const std::vector<kd_u32> hits = all_hits(mesh, ray);
+            const std::vector<kd_u32> hits = all_hits(mesh, ray, fp64);
             KdRayPrecomp p;
             kd_ray_precompute(&ray, &p);
             KdHit best = no_hit();
             for (std::size_t i = 0; i < mesh.count(); ++i)
-                kd_intersect_triangle(&p, &mesh.triangles[i * KDRAY_FLOATS_PER_TRIANGLE], kd_u32(i),
-                                      0.0f, &best);
+                kd_intersect_triangle_with(&p, &mesh.triangles[i * KDRAY_FLOATS_PER_TRIANGLE],
+                                           kd_u32(i), 0.0f, &best, fp64);
             bool shared = false;
             for (kd_u32 id : target.sharing) shared = shared || id == best.prim;
             const bool ok = !hits.empty() && shared && std::fabs(best.t - 1.0f) < 1e-2f;
@@ -160,15 +165,18 @@ TEST_CASE("rays through shared edges and vertices of a grid never slip through")
         {"axis-aligned at 1e5", {1e5f, 1e5f, 1e5f}, {1, 0, 0}, {0, 1, 0}, 5.0f},
         {"rotated at 1e5", {1e5f, -1e5f, 1e5f}, r1 * 3.0f, r2 * 2.0f, 20.0f},
     };
-    int total = 0;
-    for (const Case& c : cases) {
-        CAPTURE(c.name);
-        Mesh mesh;
-        std::vector<Target> targets;
-        make_grid(8, c.origin, c.e1, c.e2, mesh, targets);
-        total += sweep(mesh, targets, normalize(cross(c.e1, c.e2)), c.distance, 40, 7);
+    for (const int fp64 : kArithmetics) {
+        CAPTURE(fp64);
+        int total = 0;
+        for (const Case& c : cases) {
+            CAPTURE(c.name);
+            Mesh mesh;
+            std::vector<Target> targets;
+            make_grid(8, c.origin, c.e1, c.e2, mesh, targets);
+            total += sweep(mesh, targets, normalize(cross(c.e1, c.e2)), c.distance, 40, 7, fp64);
+        }
+        CHECK(total > 10000);
     }
-    CHECK(total > 10000);
 }
 
 TEST_CASE("rays straight down onto exact grid vertices and edges hit") {
@@ -177,19 +185,22 @@ TEST_CASE("rays straight down onto exact grid vertices and edges hit") {
     Mesh mesh;
     std::vector<Target> targets;
     make_grid(6, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, mesh, targets);
-    int misses = 0;
-    for (const Target& target : targets)
-        for (float dz : {-1.0f, 1.0f}) {
-            const KdRay ray = make_ray(target.point - Vec3{0, 0, dz * 2.0f}, {0, 0, dz});
-            const std::vector<kd_u32> hits = all_hits(mesh, ray);
-            if (hits.empty()) ++misses;
-            for (kd_u32 id : hits) {
-                bool shared = false;
-                for (kd_u32 s : target.sharing) shared = shared || s == id;
-                CHECK(shared);
+    for (const int fp64 : kArithmetics) {
+        CAPTURE(fp64);
+        int misses = 0;
+        for (const Target& target : targets)
+            for (float dz : {-1.0f, 1.0f}) {
+                const KdRay ray = make_ray(target.point - Vec3{0, 0, dz * 2.0f}, {0, 0, dz});
+                const std::vector<kd_u32> hits = all_hits(mesh, ray, fp64);
+                if (hits.empty()) ++misses;
+                for (kd_u32 id : hits) {
+                    bool shared = false;
+                    for (kd_u32 s : target.sharing) shared = shared || s == id;
+                    CHECK(shared);
+                }
             }
-        }
-    CHECK(misses == 0);
+        CHECK(misses == 0);
+    }
 }
 
 TEST_CASE("rays through the centre of an irregular fan hit one of its triangles") {
@@ -206,21 +217,22 @@ TEST_CASE("rays through the centre of an irregular fan hit one of its triangles"
     }
     Mesh mesh;
     for (int i = 0; i < n; ++i) mesh.add(centre, rim[i], rim[(i + 1) % n]);
-    int misses = 0;
+    int misses[2] = {0, 0};
     for (int k = 0; k < 5000; ++k) {
         Vec3 org = centre + Vec3{unit(rng), unit(rng), unit(rng)} * 3.0f;
         if (std::fabs(org.z - centre.z) < 0.5f) org.z += 1.0f;
         const KdRay ray = make_ray(org, centre - org);
-        if (all_hits(mesh, ray).empty()) ++misses;
+        for (const int fp64 : kArithmetics) misses[fp64] += all_hits(mesh, ray, fp64).empty();
     }
-    CHECK(misses == 0);
+    CHECK(misses[1] == 0);
+    CHECK(misses[0] == 0);
 }
 
 namespace {
 
 /// Rays from random origins at points of the degenerate triangle `tri` (its first corner, the
 /// middle and random points between its first and last corners); returns how many hit it.
-int hits_on_degenerate(const std::vector<float>& tri, std::uint32_t seed) {
+int hits_on_degenerate(const std::vector<float>& tri, std::uint32_t seed, int fp64) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
     const Vec3 a{tri[0], tri[1], tri[2]}, c{tri[6], tri[7], tri[8]};
@@ -229,7 +241,7 @@ int hits_on_degenerate(const std::vector<float>& tri, std::uint32_t seed) {
         const float s = k % 3 == 0 ? 0.0f : k % 3 == 1 ? 0.5f : 0.5f + 0.5f * unit(rng);
         const Vec3 target = a + (c - a) * s;
         const Vec3 org = target + Vec3{unit(rng), unit(rng), unit(rng)} * 4.0f;
-        if (intersect(tri, make_ray(org, target - org)).prim != KDRAY_NO_HIT) ++hits;
+        if (intersect(tri, make_ray(org, target - org), fp64).prim != KDRAY_NO_HIT) ++hits;
     }
     return hits;
 }
@@ -240,9 +252,12 @@ TEST_CASE("triangles with coincident corners are never hit") {
     // Two equal corners make one edge function exactly zero and the other two exact negatives
     // of each other, so the sign test or det == 0 rejects every ray.
     const Vec3 p{0.25f, 0.5f, 0.0f}, q{1.0f, 2.0f, 3.0f};
-    CHECK(hits_on_degenerate({p.x, p.y, p.z, p.x, p.y, p.z, p.x, p.y, p.z}, 5) == 0);
-    CHECK(hits_on_degenerate({p.x, p.y, p.z, p.x, p.y, p.z, q.x, q.y, q.z}, 6) == 0);
-    CHECK(hits_on_degenerate({q.x, q.y, q.z, p.x, p.y, p.z, p.x, p.y, p.z}, 7) == 0);
+    for (const int fp64 : kArithmetics) {
+        CAPTURE(fp64);
+        CHECK(hits_on_degenerate({p.x, p.y, p.z, p.x, p.y, p.z, p.x, p.y, p.z}, 5, fp64) == 0);
+        CHECK(hits_on_degenerate({p.x, p.y, p.z, p.x, p.y, p.z, q.x, q.y, q.z}, 6, fp64) == 0);
+        CHECK(hits_on_degenerate({q.x, q.y, q.z, p.x, p.y, p.z, p.x, p.y, p.z}, 7, fp64) == 0);
+    }
 }
 
 // Three distinct collinear corners stop being collinear once rounded into ray space, so the
@@ -255,7 +270,8 @@ TEST_CASE("collinear zero-area triangles are collapsed and never hit") {
                                    std::vector<float>{0, 0, 0, 2, 2, 2, 1, 1, 1}}) {
         kdray::Scene scene = kdray::make_scene(tri);
         CHECK(scene.zero_area_triangles == 1);
-        CHECK(hits_on_degenerate(scene.triangles, 8) == 0);
+        for (const int fp64 : kArithmetics)
+            CHECK(hits_on_degenerate(scene.triangles, 8, fp64) == 0);
     }
 }
 
@@ -301,7 +317,7 @@ TEST_CASE("distances on long thin triangles are exact to a few float ulps") {
     // n.(p0 - o) / n.d with n from the edges.
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-    int tested = 0, worst_ulps = 0;
+    int tested = 0, worst_ulps[2] = {0, 0}, paths_differ = 0;
     for (int i = 0; i < 2000; ++i) {
         const float y = unit(rng), z = 1e-3f * unit(rng);
         const Vec3 p0{-5000.0f + unit(rng), y, z}, p1{5000.0f + unit(rng), y + 1e-3f, z},
@@ -316,7 +332,11 @@ TEST_CASE("distances on long thin triangles are exact to a few float ulps") {
         const Vec3 dir = normalize(Vec3{along, -0.5f + 0.2f * (unit(rng) - 0.5f),
                                         0.5f + 0.2f * (unit(rng) - 0.5f)});
         const Vec3 org = target - dir * 1.632f;
-        const KdHit h = intersect(tri, make_ray(org, dir));
+        const KdHit h = intersect(tri, make_ray(org, dir), 1);
+        const KdHit h_ff = intersect(tri, make_ray(org, dir), 0);
+        // The inside test is float in both; only the distance's arithmetic differs.
+        REQUIRE(h_ff.prim == h.prim);
+        paths_differ += h_ff.t != h.t;
         // About half of these rays miss: seen along its length a needle 1e-3 wide is a few
         // float spacings of its 5000-away corners wide in ray space, and the inside test is the
         // float one (watertight). The distances of the hits are what this test is about.
@@ -331,12 +351,18 @@ TEST_CASE("distances on long thin triangles are exact to a few float ulps") {
             (n[0] * (L(p0.x) - org.x) + n[1] * (L(p0.y) - org.y) + n[2] * (L(p0.z) - org.z)) /
             (n[0] * dir.x + n[1] * dir.y + n[2] * dir.z);
         const float ulp = std::nextafter(float(exact), INFINITY) - float(exact);
-        worst_ulps = std::max(worst_ulps, int(std::fabs(L(h.t) - exact) / ulp + 0.5L));
+        worst_ulps[1] = std::max(worst_ulps[1], int(std::fabs(L(h.t) - exact) / ulp + 0.5L));
+        worst_ulps[0] = std::max(worst_ulps[0], int(std::fabs(L(h_ff.t) - exact) / ulp + 0.5L));
     }
     CAPTURE(tested);
     CHECK(tested > 500);
-    CAPTURE(worst_ulps);
-    CHECK(worst_ulps <= 2);
+    CAPTURE(worst_ulps[1]);
+    CAPTURE(worst_ulps[0]);
+    CHECK(worst_ulps[1] <= 2);
+    CHECK(worst_ulps[0] <= 2);
+    // Both round a value exact to far more than a float: they differ only at near-ties.
+    CAPTURE(paths_differ);
+    CHECK(paths_differ <= tested / 100);
 }
 
 TEST_CASE("the hit must lie in [tmin, best)") {

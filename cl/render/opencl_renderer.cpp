@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <cstdlib>
 #include <iterator>
 #include <string>
 #include <utility>
@@ -70,6 +71,8 @@ std::string render_options(const ClDevice& device, const OpenClRenderChoice& cho
     std::string options = "-DKDRAY_COMPILED_EFFECTS=" + std::to_string(choice.effects) +
                           " -DKDRAY_COMPILED_INTERSECT=" + std::to_string(choice.intersect) +
                           " -DKDRAY_COMPILED_PACKETS=" + (choice.packets ? "1" : "0");
+    // Without it a device with fp64 would take the double path whatever the host decided.
+    if (!choice.fp64) options += " -DKDRAY_FORCE_NO_FP64=1";
     cl_device_fp_config fp = 0;
     if (clGetDeviceInfo(device.device()(), CL_DEVICE_SINGLE_FP_CONFIG, sizeof(fp), &fp, nullptr) ==
             CL_SUCCESS &&
@@ -166,8 +169,19 @@ void launch_rows(ClDevice& device, OpenClRenderPlan& plan, const RenderBuffers& 
 
 }  // namespace
 
+bool render_uses_fp64(const ClDevice& device) {
+    const char* force = std::getenv("KDRAY_FORCE_NO_FP64");
+    const bool forced = force != nullptr && *force != '\0' && std::string(force) != "0";
+    return device.info().fp64 && !forced;
+}
+
+const char* exact_arithmetic_name(bool fp64) {
+    return fp64 ? "fp64" : "float-float";
+}
+
 OpenClRenderChoice choose_opencl_render(const ClDevice& device, const RenderInputs& inputs) {
     OpenClRenderChoice choice;
+    choice.fp64 = render_uses_fp64(device);
     choice.effects = inputs.effects.bits();
     choice.intersect = inputs.intersect;
     choice.packets = use_packets(device, inputs.intersect, inputs.packets);

@@ -25,11 +25,21 @@ namespace kdray {
 struct OpenClRenderChoice {
     kd_u32 effects = 0, intersect = KDRAY_INTERSECT_WATERTIGHT;
     bool packets = false, shadow_packets = false;
+    /// The triangle test's exact steps in double (true) or float-float (core/kd_float_float.h).
+    bool fp64 = true;
     std::string pixel_kernel;  // kd_render_pixels or kd_shade_traced_pixels
 
     auto operator<=>(const OpenClRenderChoice&) const = default;
 };
 OpenClRenderChoice choose_opencl_render(const ClDevice& device, const RenderInputs& inputs);
+
+/// Whether render programs on `device` do the triangle test's exact steps (the watertight edge
+/// fallback, the refined distance) in double: the device has fp64 and the environment does not
+/// set KDRAY_FORCE_NO_FP64 (to anything but "" or "0"), which makes them take the float-float
+/// path a device without fp64 takes, for tests.
+bool render_uses_fp64(const ClDevice& device);
+/// "fp64" or "float-float", as stats.json and the log name the path.
+const char* exact_arithmetic_name(bool fp64);
 
 /// A choice's kernels, created from its render program (built once per effects combination and
 /// triangle test by cl/runtime/program_cache); packet and shadow only where the choice uses them.

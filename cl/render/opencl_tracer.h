@@ -22,6 +22,9 @@ class OpenClTracer final : public Tracer {
     FrameResult trace(const BuiltTree& built, const Scene& scene,
                       const RenderInputs& inputs) override;
     std::string name() const override { return "opencl"; }
+    std::string exact_arithmetic() const override {
+        return exact_arithmetic_name(render_uses_fp64(device_));
+    }
     bool computes_on_host() const override { return device_.is_cpu(); }
     /// The combinations planned so far.
     std::size_t plan_count() const { return plans_.size(); }

@@ -100,6 +100,11 @@ std::vector<FoundDevice> find_devices() {
             info.compute_units = device.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
             info.global_mem_bytes = device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
             info.max_alloc_bytes = device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
+            // Asked without the bindings' exceptions: a device that cannot answer has no fp64.
+            cl_device_fp_config fp64 = 0;
+            info.fp64 = clGetDeviceInfo(device(), CL_DEVICE_DOUBLE_FP_CONFIG, sizeof(fp64), &fp64,
+                                        nullptr) == CL_SUCCESS &&
+                        fp64 != 0;
             // The C++ bindings keep the terminating NUL of string queries.
             for (std::string* s : {&info.name, &info.vendor, &info.version})
                 while (!s->empty() && s->back() == '\0') s->pop_back();

@@ -28,6 +28,8 @@ struct ClDeviceInfo {
     unsigned compute_units = 0;
     std::uint64_t global_mem_bytes = 0;
     std::uint64_t max_alloc_bytes = 0;
+    /// Whether the device has double precision (CL_DEVICE_DOUBLE_FP_CONFIG not 0: cl_khr_fp64).
+    bool fp64 = false;
 };
 
 /// Every device of every platform, in platform order. Throws Error, with the command that installs

@@ -81,6 +81,34 @@ KDRAY_INLINE float16 kd_packet_plane_distance(const KdPacket* p, __global const 
     return vload16(0, t);
 }
 
+#if !KDRAY_EXACT_FP64
+/* kd_exact_edges in float-float for the lanes in `lanes`, lane by lane through the scalar
+ * function (bit for bit the single ray's); only rays with an edge function exactly zero get here. */
+KDRAY_INLINE void kd_packet_exact_edges(int16 lanes, float16 ax, float16 ay, float16 bx,
+                                        float16 by, float16 cx, float16 cy, float16* u, float16* v,
+                                        float16* w) {
+    float c[6][16], out[3][16];
+    int in[16];
+    vstore16(lanes, 0, in);
+    vstore16(ax, 0, c[0]);
+    vstore16(ay, 0, c[1]);
+    vstore16(bx, 0, c[2]);
+    vstore16(by, 0, c[3]);
+    vstore16(cx, 0, c[4]);
+    vstore16(cy, 0, c[5]);
+    vstore16(*u, 0, out[0]);
+    vstore16(*v, 0, out[1]);
+    vstore16(*w, 0, out[2]);
+    for (int lane = 0; lane < 16; ++lane)
+        if (in[lane])
+            kd_exact_edges(c[0][lane], c[1][lane], c[2][lane], c[3][lane], c[4][lane], c[5][lane],
+                           0, &out[0][lane], &out[1][lane], &out[2][lane]);
+    *u = vload16(0, out[0]);
+    *v = vload16(0, out[1]);
+    *w = vload16(0, out[2]);
+}
+#endif
+
 /* kd_intersect_triangle for the lanes in `active`, operation for operation: a lane whose test
  * accepts the triangle takes it as its best hit. */
 KDRAY_HOT_INLINE void kd_packet_intersect(const KdPacket* p, __global const float* tri, uint id,
@@ -100,17 +128,19 @@ KDRAY_HOT_INLINE void kd_packet_intersect(const KdPacket* p, __global const floa
     float16 u = cx * by - cy * bx;
     float16 v = ax * cy - ay * cx;
     float16 w = bx * ay - by * ax;
-#ifdef KDRAY_HAS_DOUBLE
     const int16 zero = active & ((u == 0.0f) | (v == 0.0f) | (w == 0.0f));
     if (KDRAY_PACKET_ANY(zero)) {
+#if KDRAY_EXACT_FP64
         const double16 dax = convert_double16(ax), day = convert_double16(ay);
         const double16 dbx = convert_double16(bx), dby = convert_double16(by);
         const double16 dcx = convert_double16(cx), dcy = convert_double16(cy);
         u = select(u, convert_float16(dcx * dby - dcy * dbx), zero);
         v = select(v, convert_float16(dax * dcy - day * dcx), zero);
         w = select(w, convert_float16(dbx * day - dby * dax), zero);
-    }
+#else
+        kd_packet_exact_edges(zero, ax, ay, bx, by, cx, cy, &u, &v, &w);
 #endif
+    }
     int16 ok =
         active & ~(((u < 0.0f) | (v < 0.0f) | (w < 0.0f)) & ((u > 0.0f) | (v > 0.0f) | (w > 0.0f)));
     const float16 det = u + v + w;
