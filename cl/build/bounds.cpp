@@ -16,7 +16,7 @@ TriangleBounds upload_triangles(BuildContext& ctx, const Scene& scene) {
 void compute_triangle_boxes(BuildContext& ctx, TriangleBounds& b) {
     b.ref_box = ctx.allocate<KdBuildBox>(b.count, "triangle boxes");
     b.ref_tri = ctx.allocate<cl_uint>(b.count, "triangle references");
-    enqueue_kernel(ctx.queue, ctx.kernels.compute_aabbs, b.count, b.triangles.buffer(), b.count,
+    enqueue_kernel(ctx.device, ctx.kernels.compute_aabbs, b.count, b.triangles.buffer(), b.count,
                    b.ref_box.buffer(), b.ref_tri.buffer());
 }
 

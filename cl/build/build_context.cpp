@@ -47,10 +47,8 @@ BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins) {
 
 cl_uint BuildContext::read_uint(const DeviceArray& array, std::size_t index) {
     cl_uint value = 0;
-    with_cl_context("reading a build count", [&] {
-        queue.enqueueReadBuffer(array.buffer(), CL_TRUE, index * sizeof(cl_uint), sizeof(value),
-                                &value);
-    });
+    device.read(array.buffer(), index * sizeof(cl_uint), sizeof(value), &value,
+                "reading a build count");
     return value;
 }
 

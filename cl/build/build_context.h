@@ -65,10 +65,8 @@ struct BuildContext {
     }
     template <class T>
     void write(const DeviceArray& array, const std::vector<T>& values) {
-        with_cl_context("uploading build data", [&] {
-            queue.enqueueWriteBuffer(array.buffer(), CL_TRUE, 0, values.size() * sizeof(T),
-                                     values.data());
-        });
+        device.write(array.buffer(), 0, values.size() * sizeof(T), values.data(),
+                     "uploading build data");
     }
     cl_uint read_uint(const DeviceArray& array, std::size_t index);
 };

@@ -72,10 +72,8 @@ DeviceSceneArrays upload_scene_arrays(ClDevice& device, const SceneArrays& array
     for (const Section& s : kSections) {
         const HostArray& a = arrays.*s.array;
         if (a.bytes == 0) continue;
-        with_cl_context("uploading " + std::string(s.name), [&] {
-            device.queue().enqueueWriteBuffer(out.buffer, CL_FALSE, out.layout.*s.offset, a.bytes,
-                                              a.data);
-        });
+        device.enqueue_write(out.buffer, out.layout.*s.offset, a.bytes, a.data,
+                             "uploading " + std::string(s.name));
     }
     return out;
 }

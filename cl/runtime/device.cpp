@@ -224,6 +224,41 @@ cl::Buffer ClDevice::allocate(std::size_t bytes, const std::string& what) const 
     return buffer;
 }
 
+void ClDevice::read(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes, void* to,
+                    const std::string& what) {
+    ++traffic_.syncs, ++traffic_.transfers;
+    with_cl_context(what, [&] { queue_.enqueueReadBuffer(buffer, CL_TRUE, offset, bytes, to); });
+}
+
+void ClDevice::write(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes,
+                     const void* from, const std::string& what) {
+    ++traffic_.syncs, ++traffic_.transfers;
+    with_cl_context(what, [&] { queue_.enqueueWriteBuffer(buffer, CL_TRUE, offset, bytes, from); });
+}
+
+void ClDevice::enqueue_read(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes,
+                            void* to, const std::string& what) {
+    ++traffic_.transfers;
+    with_cl_context(what, [&] { queue_.enqueueReadBuffer(buffer, CL_FALSE, offset, bytes, to); });
+}
+
+void ClDevice::enqueue_write(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes,
+                             const void* from, const std::string& what) {
+    ++traffic_.transfers;
+    with_cl_context(what,
+                    [&] { queue_.enqueueWriteBuffer(buffer, CL_FALSE, offset, bytes, from); });
+}
+
+void ClDevice::finish(const std::string& what) {
+    ++traffic_.syncs;
+    with_cl_context(what, [&] { queue_.finish(); });
+}
+
+void ClDevice::launch(cl::Kernel& kernel, const cl::NDRange& global, const cl::NDRange& local) {
+    ++traffic_.launches;
+    queue_.enqueueNDRangeKernel(kernel, cl::NullRange, global, local);
+}
+
 std::vector<std::string> ClDevice::live_buffers() const {
     const std::lock_guard<std::mutex> lock(ledger_->mutex);
     std::vector<std::string> names;
