@@ -9,7 +9,8 @@ TriangleBounds upload_triangles(BuildContext& ctx, const Scene& scene) {
     TriangleBounds b;
     b.count = static_cast<cl_uint>(scene.triangle_count());
     b.triangles = ctx.allocate<float>(scene.triangles.size(), "triangles");
-    ctx.write(b.triangles, scene.triangles);
+    // The scene outlives the build, and the upload stage's wait comes next.
+    ctx.upload(b.triangles, scene.triangles.data(), scene.triangles.size() * sizeof(float));
     return b;
 }
 

@@ -41,9 +41,14 @@ struct BuildContext {
         : device(d),
           queue(d.queue()),
           memory(d),
-          primitives(d),
+          primitives(d, &memory),
           kernels(builder_kernels(d, p.large_split_bins)),
           params(p) {}
+    /// An upload may still read host memory when a stage throws: wait for it before that memory
+    /// goes.
+    ~BuildContext();
+    BuildContext(const BuildContext&) = delete;
+    BuildContext& operator=(const BuildContext&) = delete;
 
     ClDevice& device;
     cl::CommandQueue& queue;
@@ -63,12 +68,29 @@ struct BuildContext {
     void reserve(DeviceArray& array, std::size_t count, std::size_t used, const std::string& what) {
         memory.reserve(array, count * sizeof(T), used * sizeof(T), what);
     }
+    /// Uploads `values` without waiting (a wait per upload was a round trip each: the root
+    /// level's four, the output stage's two); a copy lives until uploads_done().
     template <class T>
     void write(const DeviceArray& array, const std::vector<T>& values) {
-        device.write(array.buffer(), 0, values.size() * sizeof(T), values.data(),
-                     "uploading build data");
+        const char* data = reinterpret_cast<const char*>(values.data());
+        staged_.emplace_back(data, data + values.size() * sizeof(T));
+        upload(array, staged_.back().data(), staged_.back().size());
+    }
+    /// Uploads `bytes` from `data` without waiting: `data` must live until uploads_done().
+    void upload(const DeviceArray& array, const void* data, std::size_t bytes) {
+        uploads_pending_ = true;
+        device.enqueue_write(array.buffer(), 0, bytes, data, "uploading build data");
+    }
+    /// After a wait on the queue: every upload so far has read its host memory.
+    void uploads_done() {
+        staged_.clear();
+        uploads_pending_ = false;
     }
     cl_uint read_uint(const DeviceArray& array, std::size_t index);
+
+  private:
+    std::vector<std::vector<char>> staged_;  // write()'s copies (a move keeps their data)
+    bool uploads_pending_ = false;
 };
 
 /// The node records by id (KdBuildNode) and the id ranges in creation order, children after

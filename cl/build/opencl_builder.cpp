@@ -133,13 +133,16 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
 
     tree.nodes.resize(b.tree.node_count);
     tree.leaf_indices.resize(b.tree.leaf_index_count);
+    // Both reads wait in the download stage's lap.
     const std::string downloading = "downloading the kd-tree";
-    device.read(b.tree.nodes.buffer(), 0, tree.nodes.size() * sizeof(KdNode), tree.nodes.data(),
-                downloading);
+    device.enqueue_read(b.tree.nodes.buffer(), 0, tree.nodes.size() * sizeof(KdNode),
+                        tree.nodes.data(), downloading);
     if (!tree.leaf_indices.empty())
-        device.read(b.tree.leaf_indices.buffer(), 0, tree.leaf_indices.size() * sizeof(kd_u32),
-                    tree.leaf_indices.data(), downloading);
+        device.enqueue_read(b.tree.leaf_indices.buffer(), 0,
+                            tree.leaf_indices.size() * sizeof(kd_u32), tree.leaf_indices.data(),
+                            downloading);
     clock.lap("download");
+    ctx.uploads_done();
     if (on_device)
         *on_device = {b.tree.nodes.detach(), b.tree.leaf_indices.detach(),
                       b.triangles.triangles.detach()};

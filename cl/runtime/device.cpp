@@ -254,6 +254,19 @@ void ClDevice::finish(const std::string& what) {
     with_cl_context(what, [&] { queue_.finish(); });
 }
 
+void ClDevice::read_strided(const cl::Buffer& buffer, std::size_t offset, std::size_t stride,
+                            std::size_t bytes, std::size_t count, void* to,
+                            const std::string& what) {
+    if (count == 0) return;
+    ++traffic_.syncs, ++traffic_.transfers;
+    with_cl_context(what, [&] {
+        const cl::array<cl::size_type, 3> origin{offset, 0, 0}, host_origin{0, 0, 0},
+            region{bytes, count, 1};
+        queue_.enqueueReadBufferRect(buffer, CL_TRUE, origin, host_origin, region, stride,
+                                     stride * count, bytes, bytes * count, to);
+    });
+}
+
 void ClDevice::launch(cl::Kernel& kernel, const cl::NDRange& global, const cl::NDRange& local) {
     ++traffic_.launches;
     queue_.enqueueNDRangeKernel(kernel, cl::NullRange, global, local);

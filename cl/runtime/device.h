@@ -96,6 +96,12 @@ class ClDevice {
     void enqueue_write(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes,
                        const void* from, const std::string& what);
     void finish(const std::string& what);
+    /// Waits for `count` values of `bytes` each, `stride` bytes apart from byte `offset` of
+    /// `buffer`, packed into `to`: one transfer (clEnqueueReadBufferRect, a row per value) where
+    /// a read per value was a transfer each. The buffer must hold count * stride bytes past
+    /// `offset` (some implementations check the whole last row).
+    void read_strided(const cl::Buffer& buffer, std::size_t offset, std::size_t stride,
+                      std::size_t bytes, std::size_t count, void* to, const std::string& what);
     /// Enqueues `kernel` (its arguments already set) over `global` items in groups of `local`,
     /// counted in traffic().launches; errors are the caller's (cl::Error).
     void launch(cl::Kernel& kernel, const cl::NDRange& global, const cl::NDRange& local);

@@ -15,8 +15,11 @@ struct ClPrimitives::Kernels {
     cl::Kernel reduce_box_chunks, reduce_box_segments, count_box_chunks;
 };
 
-ClPrimitives::ClPrimitives(ClDevice& device)
-    : device_(device), kernels_(cached_kernels<Kernels>(device, "", [&] {
+ClPrimitives::ClPrimitives(ClDevice& device, DeviceMemory* memory)
+    : device_(device),
+      own_memory_(memory ? nullptr : std::make_unique<DeviceMemory>(device)),
+      memory_(memory ? *memory : *own_memory_),
+      kernels_(cached_kernels<Kernels>(device, "", [&] {
           const cl::Program program = cached_program(device, "primitives.cl");
           Kernels k;
           k.scan_chunks = make_kernel(program, "kd_scan_chunks");
@@ -50,7 +53,11 @@ void ClPrimitives::exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, s
     }
     // Scan: chunk sums, then the scan of the sums (recursively), then add the chunk offsets.
     const std::size_t chunks = (n + chunk - 1) / chunk;
-    cl::Buffer sums = device_.allocate((chunks + 1) * sizeof(cl_uint), "scan chunk sums");
+    // Released at return while the launches below may still be queued: a later command that
+    // reuses it runs after them on the in-order queue (device_memory.h).
+    const DeviceArray sums_array =
+        memory_.allocate((chunks + 1) * sizeof(cl_uint), "scan chunk sums");
+    const cl::Buffer& sums = sums_array.buffer();
     enqueue_kernel(device_, kernels_.scan_chunks, chunks, in, out, cl_uint(n), cl_uint(chunk),
                    cl_uint(chunks), sums);
     exclusive_scan(sums, sums, chunks);
@@ -71,7 +78,9 @@ void ClPrimitives::fill(const cl::Buffer& out, cl_uint value, std::size_t n) {
 
 std::size_t ClPrimitives::compact(const cl::Buffer& values, const cl::Buffer& flags,
                                   const cl::Buffer& out, std::size_t n) {
-    cl::Buffer positions = device_.allocate((n + 1) * sizeof(cl_uint), "compaction positions");
+    const DeviceArray positions_array =
+        memory_.allocate((n + 1) * sizeof(cl_uint), "compaction positions");
+    const cl::Buffer& positions = positions_array.buffer();
     exclusive_scan(flags, positions, n);
     enqueue_kernel(device_, kernels_.compact_by_flags, n, values, flags, positions, cl_uint(n),
                    out);
