@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -86,6 +87,11 @@ struct BuildReport {
     int large_node_levels = 0;
     int small_node_levels = 0;
     std::size_t device_bytes = 0;  // peak device memory held by the build (0 for CPU builders)
+    /// The OpenCL builder's traffic with its device (cl/runtime/device.h, DeviceTraffic): host
+    /// waits (blocking reads and writes, finishes), kernel launches, and host-device transfers.
+    std::uint64_t device_syncs = 0;
+    std::uint64_t kernel_launches = 0;
+    std::uint64_t device_transfers = 0;
     /// Large nodes the OpenCL builder made leaves, unsplit, because their level would have held
     /// more references than its budget (pathological input; each is also a warning below).
     std::size_t budget_leaves = 0;

@@ -53,6 +53,10 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
         j["small_node_levels"] = built.report.small_node_levels;
         j["budget_leaves"] = built.report.budget_leaves;
         j["device_bytes"] = built.report.device_bytes;
+        // Round trips: each sync idles the device for a host round trip (DeviceTraffic).
+        j["device_syncs"] = built.report.device_syncs;
+        j["kernel_launches"] = built.report.kernel_launches;
+        j["device_transfers"] = built.report.device_transfers;
         if (triangle_count > 0)
             j["device_bytes_per_triangle"] =
                 double(built.report.device_bytes) / double(triangle_count);

@@ -66,7 +66,8 @@ differences=0
 differ() { echo "DIFFERENT: $*"; differences=$((differences + 1)); }
 
 # stats.json without what a run cannot reproduce: timings, rates and device memory (which
-# depends on the buffer pool's history), and the version string.
+# depends on the buffer pool's history), the version string, and the device round trips (a
+# change that cuts them alters nothing a user sees).
 # Paths under the side's own output folder are written as OUT/... .
 strip_stats() {
     python3 - "$1" "$2" <<'EOF'
@@ -75,7 +76,8 @@ VOLATILE_SUFFIXES = ("_ms", "_per_s", "_per_second", "timings_ms")
 # The summary's frames_per_second_after_first is a rate too (1000 / mean frame_ms after each
 # run's first); it is not 0 only over two frames or more (testdata/anim), so --quick met it once.
 VOLATILE = {"device_bytes", "device_bytes_per_triangle", "kdray_version",
-            "frames_per_second_after_first"}
+            "frames_per_second_after_first", "device_syncs", "kernel_launches",
+            "device_transfers"}
 side_dir = sys.argv[2]
 def strip(x):
     if isinstance(x, dict):

@@ -45,12 +45,19 @@ BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins) {
     });
 }
 
+BuildContext::~BuildContext() {
+    if (!uploads_pending_) return;
+    try {
+        device.finish("waiting for a failed build's uploads");
+    } catch (const Error&) {
+        // A failed queue runs nothing more, so nothing reads the memory either.
+    }
+}
+
 cl_uint BuildContext::read_uint(const DeviceArray& array, std::size_t index) {
     cl_uint value = 0;
-    with_cl_context("reading a build count", [&] {
-        queue.enqueueReadBuffer(array.buffer(), CL_TRUE, index * sizeof(cl_uint), sizeof(value),
-                                &value);
-    });
+    device.read(array.buffer(), index * sizeof(cl_uint), sizeof(value), &value,
+                "reading a build count");
     return value;
 }
 

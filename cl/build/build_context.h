@@ -41,9 +41,14 @@ struct BuildContext {
         : device(d),
           queue(d.queue()),
           memory(d),
-          primitives(d),
+          primitives(d, &memory),
           kernels(builder_kernels(d, p.large_split_bins)),
           params(p) {}
+    /// An upload may still read host memory when a stage throws: wait for it before that memory
+    /// goes.
+    ~BuildContext();
+    BuildContext(const BuildContext&) = delete;
+    BuildContext& operator=(const BuildContext&) = delete;
 
     ClDevice& device;
     cl::CommandQueue& queue;
@@ -63,22 +68,36 @@ struct BuildContext {
     void reserve(DeviceArray& array, std::size_t count, std::size_t used, const std::string& what) {
         memory.reserve(array, count * sizeof(T), used * sizeof(T), what, primitives);
     }
-    /// values into the array's first elements, through a buffer of exactly their size and a copy
-    /// kernel. A host write into part of a (recycled, larger) array would be simpler, but
-    /// Oclgrind 21.10 then forgets which of the array's other bytes kernels have written (it
-    /// resizes the buffer's initialisation record to the host write) and reports each later read
-    /// of them. (A buffer made with CL_MEM_COPY_HOST_PTR is not marked written there at all.)
+    /// Uploads `values` without waiting (a wait per upload was a round trip each: the root
+    /// level's four, the output stage's two); a copy lives until uploads_done().
     template <class T>
     void write(const DeviceArray& array, const std::vector<T>& values) {
-        const std::size_t bytes = values.size() * sizeof(T);
+        const char* data = reinterpret_cast<const char*>(values.data());
+        staged_.emplace_back(data, data + values.size() * sizeof(T));
+        upload(array, staged_.back().data(), staged_.back().size());
+    }
+    /// Uploads `bytes` from `data` into the array's first bytes without waiting: `data` must live
+    /// until uploads_done(). Through a buffer of exactly that size and a copy kernel: a host
+    /// write into part of a (recycled, larger) array would be simpler, but Oclgrind 21.10 then
+    /// forgets which of the array's other bytes kernels have written (it resizes the buffer's
+    /// initialisation record to the host write) and reports each later read of them.
+    void upload(const DeviceArray& array, const void* data, std::size_t bytes) {
         if (bytes == 0) return;
+        uploads_pending_ = true;
         const cl::Buffer staging = device.allocate(bytes, "staged build data");
-        with_cl_context("uploading build data", [&] {
-            queue.enqueueWriteBuffer(staging, CL_TRUE, 0, bytes, values.data());
-        });
+        device.enqueue_write(staging, 0, bytes, data, "uploading build data");
         primitives.copy(staging, array.buffer(), bytes);
     }
+    /// After a wait on the queue: every upload so far has read its host memory.
+    void uploads_done() {
+        staged_.clear();
+        uploads_pending_ = false;
+    }
     cl_uint read_uint(const DeviceArray& array, std::size_t index);
+
+  private:
+    std::vector<std::vector<char>> staged_;  // write()'s copies (a move keeps their data)
+    bool uploads_pending_ = false;
 };
 
 /// The node records by id (KdBuildNode) and the id ranges in creation order, children after

@@ -75,7 +75,7 @@ void decide_splits(BuildContext& ctx, const LargeLevel& level, bool force_leaf, 
     s.chunk_bins = ctx.allocate<cl_uint>(
         bins > 0 ? std::size_t(chunks) * KDRAY_BIN_COUNTS * bins : 1, "large node SAH bins");
     if (bins > 0 && !force_leaf)
-        enqueue_kernel(ctx.queue, ctx.kernels.bin_large, chunks, level.ref_box.buffer(),
+        enqueue_kernel(ctx.device, ctx.kernels.bin_large, chunks, level.ref_box.buffer(),
                        level.ref_start.buffer(), level.ref_count.buffer(),
                        level.chunk_start.buffer(), nodes, chunks, level.node.buffer(),
                        s.tight_box.buffer(), s.chunk_bins.buffer());
@@ -87,7 +87,7 @@ void decide_splits(BuildContext& ctx, const LargeLevel& level, bool force_leaf, 
                                 ctx.params.costs.intersection,
                                 ctx.params.empty_bonus,
                                 0};
-    enqueue_kernel(ctx.queue, ctx.kernels.split_large, nodes, args, level.node.buffer(),
+    enqueue_kernel(ctx.device, ctx.kernels.split_large, nodes, args, level.node.buffer(),
                    s.tight_box.buffer(), level.chunk_start.buffer(), level.ref_count.buffer(),
                    s.chunk_bins.buffer(), s.split.buffer(), s.cuts.buffer());
 }
@@ -98,12 +98,11 @@ void decide_splits(BuildContext& ctx, const LargeLevel& level, bool force_leaf, 
 LevelTotals classify_and_count(BuildContext& ctx, const LargeLevel& level,
                                const TriangleBounds& triangles, const KdLargeLevelArgs& args,
                                LevelSplit& s, LargeScratch& scratch) {
-    cl::CommandQueue& q = ctx.queue;
     const std::size_t refs = level.refs, chunks = level.chunks;
     keep_room<cl_uchar>(ctx, scratch.ref_sides, std::max<std::size_t>(refs, 4), "reference sides");
     keep_room<KdBuildBox>(ctx, scratch.child_box, 2 * refs, "reference child boxes");
     s.chunk_rank = ctx.allocate<cl_uint>(2 * chunks + 1, "chunk ranks");
-    enqueue_kernel(q, ctx.kernels.classify, chunks, args, level.ref_start.buffer(),
+    enqueue_kernel(ctx.device, ctx.kernels.classify, chunks, args, level.ref_start.buffer(),
                    level.ref_count.buffer(), level.chunk_start.buffer(), level.ref_tri.buffer(),
                    level.ref_box.buffer(), triangles.triangles.buffer(), level.node.buffer(),
                    s.split.buffer(), scratch.ref_sides.buffer(), scratch.child_box.buffer(),
@@ -112,20 +111,19 @@ LevelTotals classify_and_count(BuildContext& ctx, const LargeLevel& level,
 
     const std::size_t slots = 2 * std::size_t(level.nodes);
     const std::size_t slot_values = std::size_t(KDRAY_SLOT_KINDS) * slots;
-    s.slot_rank = ctx.allocate<cl_uint>(slot_values + 1, "child slots");
-    enqueue_kernel(q, ctx.kernels.count_large, level.nodes, args, level.ref_count.buffer(),
+    // A segment more than the scan needs (the total after the last): the totals' strided read
+    // below may be checked a whole stride past its last value.
+    s.slot_rank = ctx.allocate<cl_uint>(slot_values + slots, "child slots");
+    enqueue_kernel(ctx.device, ctx.kernels.count_large, level.nodes, args, level.ref_count.buffer(),
                    level.chunk_start.buffer(), s.split.buffer(), s.cuts.buffer(),
                    s.chunk_rank.buffer(), s.slot_rank.buffer());
     ctx.primitives.exclusive_scan(s.slot_rank.buffer(), s.slot_rank.buffer(), slot_values);
 
     LevelTotals totals;
-    with_cl_context("reading the large level's totals", [&] {
-        for (unsigned kind = 0; kind <= KDRAY_SLOT_KINDS; ++kind)
-            q.enqueueReadBuffer(s.slot_rank.buffer(), CL_FALSE,
-                                std::size_t(kind) * slots * sizeof(cl_uint), sizeof(cl_uint),
-                                &totals.at[kind]);
-        q.finish();
-    });
+    // Each kind's first rank, and the total after the last kind: one transfer and the level's one
+    // wait (a read per kind was 15 transfers a level).
+    ctx.device.read_strided(s.slot_rank.buffer(), 0, slots * sizeof(cl_uint), sizeof(cl_uint),
+                            totals.at.size(), totals.at.data(), "reading the large level's totals");
     return totals;
 }
 
@@ -182,11 +180,11 @@ LargeLevel LargeLevel::next(BuildContext& ctx, const TriangleBounds& triangles, 
     LargeLevel next =
         allocate(ctx, totals.total(KDRAY_SLOT_LARGE), totals.total(KDRAY_SLOT_LARGE_REFS),
                  totals.total(KDRAY_SLOT_LARGE_CHUNKS));
-    enqueue_kernel(ctx.queue, ctx.kernels.emit_large, nodes, args, node.buffer(),
+    enqueue_kernel(ctx.device, ctx.kernels.emit_large, nodes, args, node.buffer(),
                    ref_count.buffer(), s.split.buffer(), s.cuts.buffer(), s.slot_rank.buffer(),
                    output.records.buffer(), next.node.buffer(), next.ref_start.buffer(),
                    next.ref_count.buffer(), next.chunk_start.buffer(), small.roots.buffer());
-    enqueue_kernel(ctx.queue, ctx.kernels.distribute, chunks, args, ref_start.buffer(),
+    enqueue_kernel(ctx.device, ctx.kernels.distribute, chunks, args, ref_start.buffer(),
                    ref_count.buffer(), chunk_start.buffer(), ref_tri.buffer(), ref_box.buffer(),
                    scratch.ref_sides.buffer(), scratch.child_box.buffer(), s.split.buffer(),
                    s.chunk_rank.buffer(), s.slot_rank.buffer(), next.ref_tri.buffer(),

@@ -27,9 +27,9 @@ using namespace build_detail;
 /// Per-stage wall times. Each lap waits for the queue, so a stage's time is its own kernels'.
 class StageClock {
   public:
-    StageClock(cl::CommandQueue& queue, BuildReport* report) : queue_(queue), report_(report) {}
+    StageClock(ClDevice& device, BuildReport* report) : device_(device), report_(report) {}
     void lap(const char* stage) {
-        with_cl_context(std::string("finishing build stage ") + stage, [&] { queue_.finish(); });
+        device_.finish(std::string("finishing build stage ") + stage);
         const auto now = std::chrono::steady_clock::now();
         if (report_)
             report_->timings_ms.emplace_back(
@@ -38,7 +38,7 @@ class StageClock {
     }
 
   private:
-    cl::CommandQueue& queue_;
+    ClDevice& device_;
     BuildReport* report_;
     std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
@@ -83,6 +83,7 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
                                         const BuildParams& params, const SmallStageLimits& limits,
                                         BuildReport* report, DeviceTree* on_device) {
     const auto start = std::chrono::steady_clock::now();
+    const DeviceTraffic traffic_before = device.traffic();
     KdTree tree;
     tree.bounds = scene.bounds();
     tree.params = supported_params(params);
@@ -110,7 +111,7 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
 
     Build b(device, tree.params);
     BuildContext& ctx = b.ctx;
-    StageClock clock(ctx.queue, report);
+    StageClock clock(device, report);
     b.output.reserve_records(ctx, 1);
     b.output.add_batch(1);  // the root, id 0
     b.small_roots.reserve(ctx, 1, 1);
@@ -132,15 +133,16 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
 
     tree.nodes.resize(b.tree.node_count);
     tree.leaf_indices.resize(b.tree.leaf_index_count);
-    with_cl_context("downloading the kd-tree", [&] {
-        ctx.queue.enqueueReadBuffer(b.tree.nodes.buffer(), CL_TRUE, 0,
-                                    tree.nodes.size() * sizeof(KdNode), tree.nodes.data());
-        if (!tree.leaf_indices.empty())
-            ctx.queue.enqueueReadBuffer(b.tree.leaf_indices.buffer(), CL_TRUE, 0,
-                                        tree.leaf_indices.size() * sizeof(kd_u32),
-                                        tree.leaf_indices.data());
-    });
+    // Both reads wait in the download stage's lap.
+    const std::string downloading = "downloading the kd-tree";
+    device.enqueue_read(b.tree.nodes.buffer(), 0, tree.nodes.size() * sizeof(KdNode),
+                        tree.nodes.data(), downloading);
+    if (!tree.leaf_indices.empty())
+        device.enqueue_read(b.tree.leaf_indices.buffer(), 0,
+                            tree.leaf_indices.size() * sizeof(kd_u32), tree.leaf_indices.data(),
+                            downloading);
     clock.lap("download");
+    ctx.uploads_done();
     if (on_device)
         *on_device = {b.tree.nodes.detach(), b.tree.leaf_indices.detach(),
                       b.triangles.triangles.detach()};
@@ -159,6 +161,10 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
                 "triangles and trace slowly");
         report->small_node_levels = b.small.levels;
         report->device_bytes = ctx.memory.peak_bytes();
+        const DeviceTraffic& traffic = device.traffic();
+        report->device_syncs = traffic.syncs - traffic_before.syncs;
+        report->kernel_launches = traffic.launches - traffic_before.launches;
+        report->device_transfers = traffic.transfers - traffic_before.transfers;
     }
     return tree;
 }

@@ -26,7 +26,6 @@ namespace kdray::build_detail {
  * figures were 5863 against 928 ms (one build each, same load). */
 void build_batch_levels(BuildContext& ctx, const SmallRoots& small, const TriangleBounds& triangles,
                         SmallSubtrees& out, SmallBatch& batch) {
-    cl::CommandQueue& q = ctx.queue;
     BuilderKernels& k = ctx.kernels;
     const KdSmallBatchArgs args = batch.args(ctx.params, 0);
 
@@ -36,7 +35,8 @@ void build_batch_levels(BuildContext& ctx, const SmallRoots& small, const Triang
     DeviceArray nodes = ctx.allocate<KdSmallLevelNode>(batch.roots, "small level nodes",
                                                        3 * (std::size_t(batch.refs) + batch.roots));
     DeviceArray next_free = ctx.allocate<cl_uint>(1, "small level node count");
-    enqueue_kernel(q, k.start_small_level, batch.roots, args, small.roots.buffer(), nodes.buffer());
+    enqueue_kernel(ctx.device, k.start_small_level, batch.roots, args, small.roots.buffer(),
+                   nodes.buffer());
     std::vector<std::pair<cl_uint, cl_uint>> levels;  // (first node, count)
     cl_uint begin = 0, count = batch.roots;
     while (count > 0) {
@@ -47,10 +47,10 @@ void build_batch_levels(BuildContext& ctx, const SmallRoots& small, const Triang
             checked_u32(std::uint64_t(end) + 2 * std::uint64_t(count), "small level nodes");
         ctx.reserve<KdSmallLevelNode>(nodes, room, end, "small level nodes");
         ctx.primitives.fill(next_free.buffer(), end, 1);
-        enqueue_kernel(q, k.split_small_level, std::size_t(count) * KDRAY_LAUNCH_GROUP, args, begin,
-                       count, small.roots.buffer(), small.ref_box.buffer(), out.side_masks.buffer(),
-                       small.ref_tri.buffer(), triangles.triangles.buffer(), nodes.buffer(),
-                       next_free.buffer());
+        enqueue_kernel(ctx.device, k.split_small_level, std::size_t(count) * KDRAY_LAUNCH_GROUP,
+                       args, begin, count, small.roots.buffer(), small.ref_box.buffer(),
+                       out.side_masks.buffer(), small.ref_tri.buffer(),
+                       triangles.triangles.buffer(), nodes.buffer(), next_free.buffer());
         begin = end;
         count = ctx.read_uint(next_free, 0) - end;
     }
@@ -62,14 +62,15 @@ void build_batch_levels(BuildContext& ctx, const SmallRoots& small, const Triang
     DeviceArray position = ctx.allocate<cl_uint>(total, "small preorder positions");
     DeviceArray leaf_position = ctx.allocate<cl_uint>(total, "small leaf positions");
     for (auto it = levels.rbegin(); it != levels.rend(); ++it)
-        enqueue_kernel(q, k.size_small_level, it->second, it->first, it->second, nodes.buffer(),
-                       subtree_nodes.buffer(), subtree_refs.buffer());
+        enqueue_kernel(ctx.device, k.size_small_level, it->second, it->first, it->second,
+                       nodes.buffer(), subtree_nodes.buffer(), subtree_refs.buffer());
     ctx.primitives.fill(position.buffer(), 0, batch.roots);
     ctx.primitives.fill(leaf_position.buffer(), 0, batch.roots);
     for (const auto& [first, n] : levels)
-        enqueue_kernel(q, k.place_small_level, n, first, n, nodes.buffer(), subtree_nodes.buffer(),
-                       subtree_refs.buffer(), position.buffer(), leaf_position.buffer());
-    enqueue_kernel(q, k.count_small_level, batch.roots, args, subtree_nodes.buffer(),
+        enqueue_kernel(ctx.device, k.place_small_level, n, first, n, nodes.buffer(),
+                       subtree_nodes.buffer(), subtree_refs.buffer(), position.buffer(),
+                       leaf_position.buffer());
+    enqueue_kernel(ctx.device, k.count_small_level, batch.roots, args, subtree_nodes.buffer(),
                    subtree_refs.buffer(), out.node_count.buffer(), out.leaf_refs.buffer());
 
     /* The records, laid out as the per-root kernel's: the first pass's run per root, and exactly
@@ -83,9 +84,10 @@ void build_batch_levels(BuildContext& ctx, const SmallRoots& small, const Triang
         batch.records[1] =
             ctx.allocate<KdSmallNode>(second_records, "small node records (second pass)");
     const DeviceArray& second = batch.records[second_records > 0 ? 1 : 0];
-    enqueue_kernel(q, k.write_small_level, total, args, total, small.roots.buffer(), nodes.buffer(),
-                   out.node_count.buffer(), position.buffer(), leaf_position.buffer(),
-                   batch.second_offset.buffer(), batch.records[0].buffer(), second.buffer());
+    enqueue_kernel(ctx.device, k.write_small_level, total, args, total, small.roots.buffer(),
+                   nodes.buffer(), out.node_count.buffer(), position.buffer(),
+                   leaf_position.buffer(), batch.second_offset.buffer(), batch.records[0].buffer(),
+                   second.buffer());
     out.nodes = checked_u32(std::uint64_t(out.nodes) + total, "small nodes");
     out.levels = std::max(out.levels, int(levels.size()));
 }

@@ -48,10 +48,8 @@ std::vector<SmallBatch> small_batches(BuildContext& ctx, const SmallRoots& small
         return batches;
     }
     std::vector<KdSmallRoot> roots(small.count);
-    with_cl_context("reading the small roots' reference counts", [&] {
-        ctx.queue.enqueueReadBuffer(small.roots.buffer(), CL_TRUE, 0,
-                                    roots.size() * sizeof(KdSmallRoot), roots.data());
-    });
+    ctx.device.read(small.roots.buffer(), 0, roots.size() * sizeof(KdSmallRoot), roots.data(),
+                    "reading the small roots' reference counts");
     for (cl_uint root = 0; root < small.count; ++root) {
         const cl_uint count = roots[root].ref_count;
         SmallBatch& batch = batches.back();
@@ -79,12 +77,11 @@ std::vector<SmallBatch> small_batches(BuildContext& ctx, const SmallRoots& small
 void build_batch_subtrees(BuildContext& ctx, const SmallRoots& small,
                           const TriangleBounds& triangles, SmallSubtrees& out, SmallBatch& batch,
                           const DeviceArray& totals) {
-    cl::CommandQueue& q = ctx.queue;
     ctx.primitives.fill(totals.buffer(), 0, 3);
     std::array<cl_uint, 3> total{};
     auto build_subtrees = [&](cl_uint second_pass, const DeviceArray& second_offset,
                               const DeviceArray& records) {
-        enqueue_kernel(q, ctx.kernels.build_subtrees, batch.roots,
+        enqueue_kernel(ctx.device, ctx.kernels.build_subtrees, batch.roots,
                        batch.args(ctx.params, second_pass), small.roots.buffer(),
                        small.ref_box.buffer(), out.side_masks.buffer(), small.ref_tri.buffer(),
                        triangles.triangles.buffer(), second_offset.buffer(), records.buffer(),
@@ -95,9 +92,8 @@ void build_batch_subtrees(BuildContext& ctx, const SmallRoots& small,
         checked_u32(batch.first_scale * budget_units, "small node records"), "small node records");
     // The first pass reads no offsets; its argument is the totals buffer.
     build_subtrees(0, totals, batch.records[0]);
-    with_cl_context("reading the small stage totals", [&] {
-        q.enqueueReadBuffer(totals.buffer(), CL_TRUE, 0, 3 * sizeof(cl_uint), total.data());
-    });
+    ctx.device.read(totals.buffer(), 0, 3 * sizeof(cl_uint), total.data(),
+                    "reading the small stage totals");
     if (total[1] > batch.first_scale) {
         const cl_uint second_records = place_second_pass(ctx, small, out, batch);
         batch.records[1] =
@@ -112,13 +108,13 @@ void build_batch_subtrees(BuildContext& ctx, const SmallRoots& small,
 
 cl_uint place_second_pass(BuildContext& ctx, const SmallRoots& small, const SmallSubtrees& out,
                           SmallBatch& batch) {
-    cl::CommandQueue& q = ctx.queue;
     // Each outgrown subtree's node count, scanned into its place; the scan writes the total
     // after the last (one entry more).
     batch.second_offset =
         ctx.allocate<cl_uint>(std::size_t(batch.roots) + 1, "second-pass record offsets");
-    enqueue_kernel(q, ctx.kernels.second_pass_records, batch.roots, batch.args(ctx.params, 0),
-                   small.roots.buffer(), out.node_count.buffer(), batch.second_offset.buffer());
+    enqueue_kernel(ctx.device, ctx.kernels.second_pass_records, batch.roots,
+                   batch.args(ctx.params, 0), small.roots.buffer(), out.node_count.buffer(),
+                   batch.second_offset.buffer());
     ctx.primitives.exclusive_scan(batch.second_offset.buffer(), batch.second_offset.buffer(),
                                   batch.roots);
     return ctx.read_uint(batch.second_offset, batch.roots);
@@ -153,7 +149,7 @@ SmallSubtrees run_small_stage(BuildContext& ctx, const SmallRoots& small,
         out.side_masks = DeviceArray();
         out.side_masks = ctx.memory.allocate(std::size_t(batch.refs) * KDRAY_MASK_BYTES_PER_REF,
                                              "candidate masks");
-        enqueue_kernel(ctx.queue, ctx.kernels.split_masks, batch.refs, batch.ref_begin, batch.refs,
+        enqueue_kernel(ctx.device, ctx.kernels.split_masks, batch.refs, batch.ref_begin, batch.refs,
                        small.ref_box.buffer(), small.ref_root.buffer(), small.roots.buffer(),
                        out.side_masks.buffer());
         if (per_level)

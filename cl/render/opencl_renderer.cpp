@@ -21,10 +21,7 @@ template <class T>
 cl::Buffer upload(ClDevice& device, const std::vector<T>& data, const std::string& what) {
     cl::Buffer buffer = device.allocate(std::max<std::size_t>(1, data.size() * sizeof(T)), what);
     if (!data.empty())
-        with_cl_context("uploading " + what, [&] {
-            device.queue().enqueueWriteBuffer(buffer, CL_FALSE, 0, data.size() * sizeof(T),
-                                              data.data());
-        });
+        device.enqueue_write(buffer, 0, data.size() * sizeof(T), data.data(), "uploading " + what);
     return buffer;
 }
 
@@ -109,11 +106,10 @@ void launch_pixels(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
                    const KdRenderLaunch& launch) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.scene_data, b.layout, launch,
                     b.rgb, b.hits, b.normals, b.counts, b.traced, b.occluded);
-    device.queue().enqueueNDRangeKernel(
-        kernel, cl::NullRange,
-        cl::NDRange(round_up(std::max<std::size_t>(1, launch.view.width), kTileWidth),
-                    round_up(launch.rows, kTileHeight)),
-        cl::NDRange(kTileWidth, kTileHeight));
+    device.launch(kernel,
+                  cl::NDRange(round_up(std::max<std::size_t>(1, launch.view.width), kTileWidth),
+                              round_up(launch.rows, kTileHeight)),
+                  cl::NDRange(kTileWidth, kTileHeight));
 }
 
 /// A packet kernel's launch over the launch's rows: a work-item per tile and primary ray of its
@@ -124,10 +120,10 @@ void enqueue_packet_tiles(ClDevice& device, cl::Kernel& kernel, const KdRenderLa
     const std::size_t tiles_x =
         std::max<std::size_t>(1, (launch.view.width + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE);
     const std::size_t tiles_y = (launch.rows + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
-    device.queue().enqueueNDRangeKernel(kernel, cl::NullRange,
-                                        cl::NDRange(round_up(tiles_x, kPacketGroup), tiles_y,
-                                                    kd_primary_rays_per_pixel(&launch.view)),
-                                        cl::NDRange(kPacketGroup, 1, 1));
+    device.launch(kernel,
+                  cl::NDRange(round_up(tiles_x, kPacketGroup), tiles_y,
+                              kd_primary_rays_per_pixel(&launch.view)),
+                  cl::NDRange(kPacketGroup, 1, 1));
 }
 
 /// kd_trace_camera_packets over the launch's rows.
@@ -224,8 +220,8 @@ void warm_up_opencl_render(ClDevice& device, OpenClRenderPlan& plan) {
         buffers.rgb = buffers.hits = buffers.normals = buffers.counts = dummy;
         buffers.traced = buffers.occluded = dummy;
         launch_rows(device, plan, buffers, KdRenderLaunch{}, {0, 1});
-        device.queue().finish();
     });
+    device.finish("preparing the render kernel on " + device.info().name);
     add_compile_ms(
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
             .count());
@@ -251,7 +247,7 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
     b.leaf_indices = built_here ? on_device->leaf_indices
                                 : upload(device, tree.leaf_indices, "leaf triangle indices");
     b.triangles = built_here ? on_device->triangles : upload(device, scene.triangles, "triangles");
-    // The scene and the inputs outlive the frame's q.finish() below, which the uploads need.
+    // The scene and the inputs outlive the frame's device.finish() below, which the uploads need.
     DeviceSceneArrays arrays = upload_scene_arrays(device, frame_scene_arrays(scene, inputs));
     b.scene_data = std::move(arrays.buffer);
     b.layout = arrays.layout;
@@ -286,18 +282,16 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
     frame.hits.hits.resize(pixels);
     std::vector<float> normal_floats(inputs.normals ? pixels * 3 : 0);
     std::vector<KdRayCounts> pixel_counts(count_rays ? pixels : 0);
-    with_cl_context("reading back a frame", [&] {
-        cl::CommandQueue& q = device.queue();
-        q.enqueueReadBuffer(b.rgb, CL_FALSE, 0, pixels * 3 * sizeof(float), frame.image.rgb.data());
-        q.enqueueReadBuffer(b.hits, CL_FALSE, 0, pixels * sizeof(KdHit), frame.hits.hits.data());
-        if (inputs.normals)
-            q.enqueueReadBuffer(b.normals, CL_FALSE, 0, pixels * 3 * sizeof(float),
-                                normal_floats.data());
-        if (count_rays)
-            q.enqueueReadBuffer(b.counts, CL_FALSE, 0, pixels * sizeof(KdRayCounts),
-                                pixel_counts.data());
-        q.finish();
-    });
+    const std::string reading = "reading back a frame";
+    device.enqueue_read(b.rgb, 0, pixels * 3 * sizeof(float), frame.image.rgb.data(), reading);
+    device.enqueue_read(b.hits, 0, pixels * sizeof(KdHit), frame.hits.hits.data(), reading);
+    if (inputs.normals)
+        device.enqueue_read(b.normals, 0, pixels * 3 * sizeof(float), normal_floats.data(),
+                            reading);
+    if (count_rays)
+        device.enqueue_read(b.counts, 0, pixels * sizeof(KdRayCounts), pixel_counts.data(),
+                            reading);
+    device.finish(reading);
     if (inputs.normals) {
         frame.hits.normals.resize(pixels);
         for (std::size_t i = 0; i < pixels; ++i)

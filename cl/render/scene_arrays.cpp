@@ -70,26 +70,21 @@ DeviceSceneArrays upload_scene_arrays(ClDevice& device, const SceneArrays& array
     std::size_t total = 0;
     out.layout = layout_scene_arrays(arrays, &total);
     out.buffer = device.allocate(total, "scene arrays");
-    if (total == 0) return out;
-    /* One mapped write of the whole buffer, not a write per section: a write into part of a
-     * buffer is a transfer of its own on a discrete GPU, and Oclgrind's uninitialised-value
-     * checker keeps only the last such write of a buffer (its shadow is reallocated to the
-     * written size), so every section but one read as uninitialised there. */
-    with_cl_context("uploading the scene arrays", [&] {
-        auto* base = static_cast<unsigned char*>(device.queue().enqueueMapBuffer(
-            out.buffer, CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0, total));
-        std::size_t end = 0;
-        for (const Section& s : kSections) {
-            const HostArray& a = arrays.*s.array;
-            const std::size_t at = out.layout.*s.offset;
-            if (a.bytes == 0) continue;
-            std::memset(base + end, 0, at - end); /* the alignment gap: defined bytes */
-            std::memcpy(base + at, a.data, a.bytes);
-            end = at + a.bytes;
-        }
-        std::memset(base + end, 0, total - end);
-        device.queue().enqueueUnmapMemObject(out.buffer, base);
-    });
+    device.write_mapped(
+        out.buffer, total,
+        [&](unsigned char* base) {
+            std::size_t end = 0;
+            for (const Section& s : kSections) {
+                const HostArray& a = arrays.*s.array;
+                const std::size_t at = out.layout.*s.offset;
+                if (a.bytes == 0) continue;
+                std::memset(base + end, 0, at - end); /* the alignment gap: defined bytes */
+                std::memcpy(base + at, a.data, a.bytes);
+                end = at + a.bytes;
+            }
+            std::memset(base + end, 0, total - end);
+        },
+        "uploading the scene arrays");
     return out;
 }
 

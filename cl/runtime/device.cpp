@@ -229,6 +229,67 @@ cl::Buffer ClDevice::allocate(std::size_t bytes, const std::string& what) const 
     return buffer;
 }
 
+void ClDevice::read(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes, void* to,
+                    const std::string& what) {
+    ++traffic_.syncs, ++traffic_.transfers;
+    with_cl_context(what, [&] { queue_.enqueueReadBuffer(buffer, CL_TRUE, offset, bytes, to); });
+}
+
+void ClDevice::write(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes,
+                     const void* from, const std::string& what) {
+    ++traffic_.syncs, ++traffic_.transfers;
+    with_cl_context(what, [&] { queue_.enqueueWriteBuffer(buffer, CL_TRUE, offset, bytes, from); });
+}
+
+void ClDevice::write_mapped(const cl::Buffer& buffer, std::size_t bytes,
+                            const std::function<void(unsigned char* base)>& fill,
+                            const std::string& what) {
+    if (bytes == 0) return;
+    ++traffic_.syncs, ++traffic_.transfers;
+    with_cl_context(what, [&] {
+        auto* base = static_cast<unsigned char*>(
+            queue_.enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0, bytes));
+        fill(base);
+        queue_.enqueueUnmapMemObject(buffer, base);
+    });
+}
+
+void ClDevice::enqueue_read(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes,
+                            void* to, const std::string& what) {
+    ++traffic_.transfers;
+    with_cl_context(what, [&] { queue_.enqueueReadBuffer(buffer, CL_FALSE, offset, bytes, to); });
+}
+
+void ClDevice::enqueue_write(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes,
+                             const void* from, const std::string& what) {
+    ++traffic_.transfers;
+    with_cl_context(what,
+                    [&] { queue_.enqueueWriteBuffer(buffer, CL_FALSE, offset, bytes, from); });
+}
+
+void ClDevice::finish(const std::string& what) {
+    ++traffic_.syncs;
+    with_cl_context(what, [&] { queue_.finish(); });
+}
+
+void ClDevice::read_strided(const cl::Buffer& buffer, std::size_t offset, std::size_t stride,
+                            std::size_t bytes, std::size_t count, void* to,
+                            const std::string& what) {
+    if (count == 0) return;
+    ++traffic_.syncs, ++traffic_.transfers;
+    with_cl_context(what, [&] {
+        const cl::array<cl::size_type, 3> origin{offset, 0, 0}, host_origin{0, 0, 0},
+            region{bytes, count, 1};
+        queue_.enqueueReadBufferRect(buffer, CL_TRUE, origin, host_origin, region, stride,
+                                     stride * count, bytes, bytes * count, to);
+    });
+}
+
+void ClDevice::launch(cl::Kernel& kernel, const cl::NDRange& global, const cl::NDRange& local) {
+    ++traffic_.launches;
+    queue_.enqueueNDRangeKernel(kernel, cl::NullRange, global, local);
+}
+
 std::vector<std::string> ClDevice::live_buffers() const {
     const std::lock_guard<std::mutex> lock(ledger_->mutex);
     std::vector<std::string> names;

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -38,6 +39,16 @@ std::vector<ClDeviceInfo> list_cl_devices();
 
 struct BufferLedger;
 class ProgramCache;
+
+/// What the host has asked of a device's queue, counted where it is asked (ClDevice's blocking
+/// calls, launch.h's enqueue_kernel): a build reports the difference over its run. On a discrete
+/// GPU each sync is a round trip of 10-50 microseconds in which the device idles, so a build's
+/// syncs are a floor on its time that no faster kernel lowers.
+struct DeviceTraffic {
+    std::uint64_t syncs = 0;      // host waits: blocking reads and writes, finishes
+    std::uint64_t launches = 0;   // kernels enqueued
+    std::uint64_t transfers = 0;  // reads and writes between host and device, blocking or not
+};
 
 /// An opened device: its context, one in-order command queue, and the buffers that finished builds
 /// gave back (BufferPool).
@@ -75,6 +86,37 @@ class ClDevice {
     /// deleted yet: every reference to them released, and the commands using them done.
     std::vector<std::string> live_buffers() const;
 
+    /// Every transfer between host and device, every host wait and every launch on the queue
+    /// goes through these, so that traffic() counts them. read and write wait for the transfer;
+    /// enqueue_read and enqueue_write do not (`to` or `from` must then live until the next
+    /// wait). `what` names the step in errors.
+    void read(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes, void* to,
+              const std::string& what);
+    void write(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes, const void* from,
+               const std::string& what);
+    void enqueue_read(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes, void* to,
+                      const std::string& what);
+    void enqueue_write(const cl::Buffer& buffer, std::size_t offset, std::size_t bytes,
+                       const void* from, const std::string& what);
+    void finish(const std::string& what);
+    /// Writes the whole of `buffer`'s first `bytes` through one mapping: fill(base) writes every
+    /// byte of [base, base + bytes). One transfer and one wait (the map's), for data gathered from
+    /// several host arrays. A write per part would be a transfer each, and Oclgrind 21.10's
+    /// uninitialised-value checker keeps only a buffer's last partial host write.
+    void write_mapped(const cl::Buffer& buffer, std::size_t bytes,
+                      const std::function<void(unsigned char* base)>& fill,
+                      const std::string& what);
+    /// Waits for `count` values of `bytes` each, `stride` bytes apart from byte `offset` of
+    /// `buffer`, packed into `to`: one transfer (clEnqueueReadBufferRect, a row per value) where
+    /// a read per value was a transfer each. The buffer must hold count * stride bytes past
+    /// `offset` (some implementations check the whole last row).
+    void read_strided(const cl::Buffer& buffer, std::size_t offset, std::size_t stride,
+                      std::size_t bytes, std::size_t count, void* to, const std::string& what);
+    /// Enqueues `kernel` (its arguments already set) over `global` items in groups of `local`,
+    /// counted in traffic().launches; errors are the caller's (cl::Error).
+    void launch(cl::Kernel& kernel, const cl::NDRange& global, const cl::NDRange& local);
+    const DeviceTraffic& traffic() const { return traffic_; }
+
     /// Buffers kept for the next build: at most an eighth of the device's memory, and 1 GiB.
     BufferPool& buffer_pool() { return buffer_pool_; }
 
@@ -88,6 +130,7 @@ class ClDevice {
     cl::CommandQueue queue_;
     ClDeviceInfo info_;
     BufferPool buffer_pool_;
+    DeviceTraffic traffic_;
     mutable std::uint64_t allocated_bytes_ = 0;
     std::shared_ptr<BufferLedger> ledger_;  // the buffers of allocate() not deleted yet
     std::unique_ptr<ProgramCache> program_cache_;

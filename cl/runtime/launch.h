@@ -16,6 +16,7 @@
 #include <CL/opencl.hpp>
 
 #include "cl/runtime/cl_error.h"
+#include "cl/runtime/device.h"
 #include "core/kd_build_shared.h"
 
 namespace kdray {
@@ -30,14 +31,13 @@ void set_kernel_args(cl::Kernel& kernel, const Args&... args) {
 /// Enqueues `kernel` over `count` work-items (nothing when count is 0: OpenCL forbids empty
 /// launches). `args` are set first. Errors name the kernel.
 template <class... Args>
-void enqueue_kernel(cl::CommandQueue& queue, cl::Kernel& kernel, std::size_t count,
-                    const Args&... args) {
+void enqueue_kernel(ClDevice& device, cl::Kernel& kernel, std::size_t count, const Args&... args) {
     if (count == 0) return;
     try {
         set_kernel_args(kernel, args...);
         const std::size_t group = KDRAY_LAUNCH_GROUP;
         const std::size_t global = (count + group - 1) / group * group;
-        queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(global), cl::NDRange(group));
+        device.launch(kernel, cl::NDRange(global), cl::NDRange(group));
     } catch (const cl::Error& e) {
         throw_cl_error("running kernel " + kernel.getInfo<CL_KERNEL_FUNCTION_NAME>() + " over " +
                            std::to_string(count) + " items",

@@ -15,8 +15,11 @@ struct ClPrimitives::Kernels {
     cl::Kernel reduce_box_chunks, reduce_box_segments, count_box_chunks;
 };
 
-ClPrimitives::ClPrimitives(ClDevice& device)
-    : device_(device), kernels_(cached_kernels<Kernels>(device, "", [&] {
+ClPrimitives::ClPrimitives(ClDevice& device, DeviceMemory* memory)
+    : device_(device),
+      own_memory_(memory ? nullptr : std::make_unique<DeviceMemory>(device)),
+      memory_(memory ? *memory : *own_memory_),
+      kernels_(cached_kernels<Kernels>(device, "", [&] {
           const cl::Program program = cached_program(device, "primitives.cl");
           Kernels k;
           k.scan_chunks = make_kernel(program, "kd_scan_chunks");
@@ -41,34 +44,37 @@ void ClPrimitives::exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, s
         throw Error("exclusive scan of " + std::to_string(n) + " values into a buffer of " +
                     std::to_string(out_bytes) + " bytes: it needs " +
                     std::to_string((n + 1) * sizeof(cl_uint)) + " (the total comes last)");
-    cl::CommandQueue& queue = device_.queue();
     // Chunk length: enough chunks to fill the device (a few hundred items per compute unit), at
     // least 16 elements so the sequential loop amortises the launch, and one chunk for small n.
     const std::size_t lanes = std::max<std::size_t>(1, device_.info().compute_units) * 256;
     const std::size_t chunk = std::max<std::size_t>(16, (n + lanes - 1) / lanes);
     if (n <= chunk) {
-        enqueue_kernel(queue, kernels_.scan_single, 1, in, out, cl_uint(n));
+        enqueue_kernel(device_, kernels_.scan_single, 1, in, out, cl_uint(n));
         return;
     }
     // Scan: chunk sums, then the scan of the sums (recursively), then add the chunk offsets.
     const std::size_t chunks = (n + chunk - 1) / chunk;
-    cl::Buffer sums = device_.allocate((chunks + 1) * sizeof(cl_uint), "scan chunk sums");
-    enqueue_kernel(queue, kernels_.scan_chunks, chunks, in, out, cl_uint(n), cl_uint(chunk),
+    // Released at return while the launches below may still be queued: a later command that
+    // reuses it runs after them on the in-order queue (device_memory.h).
+    const DeviceArray sums_array =
+        memory_.allocate((chunks + 1) * sizeof(cl_uint), "scan chunk sums");
+    const cl::Buffer& sums = sums_array.buffer();
+    enqueue_kernel(device_, kernels_.scan_chunks, chunks, in, out, cl_uint(n), cl_uint(chunk),
                    cl_uint(chunks), sums);
     exclusive_scan(sums, sums, chunks);
     // On a CPU device one work-item per element costs more than the adding: by chunk, a 10^6
     // scan on PoCL (2 cores, bench_primitives, median of 7) went from 3.2 to 0.51 ms, 10^5 from
     // 0.38 to 0.09. GPUs keep one item per element, which coalesces.
     if (device_.is_cpu())
-        enqueue_kernel(queue, kernels_.add_offsets_by_chunk, chunks, out, cl_uint(n),
+        enqueue_kernel(device_, kernels_.add_offsets_by_chunk, chunks, out, cl_uint(n),
                        cl_uint(chunk), cl_uint(chunks), sums);
     else
-        enqueue_kernel(queue, kernels_.add_chunk_offsets, n, out, cl_uint(n), cl_uint(chunk),
+        enqueue_kernel(device_, kernels_.add_chunk_offsets, n, out, cl_uint(n), cl_uint(chunk),
                        cl_uint(chunks), sums);
 }
 
 void ClPrimitives::fill(const cl::Buffer& out, cl_uint value, std::size_t n) {
-    enqueue_kernel(device_.queue(), kernels_.fill, n, out, value, cl_uint(n));
+    enqueue_kernel(device_, kernels_.fill, n, out, value, cl_uint(n));
 }
 
 void ClPrimitives::copy(const cl::Buffer& from, const cl::Buffer& to, std::size_t bytes) {
@@ -76,27 +82,27 @@ void ClPrimitives::copy(const cl::Buffer& from, const cl::Buffer& to, std::size_
         throw Error("internal: a device copy of " + std::to_string(bytes) +
                     " bytes, not a whole number of 32-bit words");
     const std::size_t n = bytes / sizeof(cl_uint);
-    enqueue_kernel(device_.queue(), kernels_.copy, n, from, to, cl_uint(n));
+    enqueue_kernel(device_, kernels_.copy, n, from, to, cl_uint(n));
 }
 
 std::size_t ClPrimitives::compact(const cl::Buffer& values, const cl::Buffer& flags,
                                   const cl::Buffer& out, std::size_t n) {
-    cl::Buffer positions = device_.allocate((n + 1) * sizeof(cl_uint), "compaction positions");
+    const DeviceArray positions_array =
+        memory_.allocate((n + 1) * sizeof(cl_uint), "compaction positions");
+    const cl::Buffer& positions = positions_array.buffer();
     exclusive_scan(flags, positions, n);
-    enqueue_kernel(device_.queue(), kernels_.compact_by_flags, n, values, flags, positions,
-                   cl_uint(n), out);
+    enqueue_kernel(device_, kernels_.compact_by_flags, n, values, flags, positions, cl_uint(n),
+                   out);
     cl_uint count = 0;
-    with_cl_context("reading the compacted count", [&] {
-        device_.queue().enqueueReadBuffer(positions, CL_TRUE, n * sizeof(cl_uint), sizeof(count),
-                                          &count);
-    });
+    device_.read(positions, n * sizeof(cl_uint), sizeof(count), &count,
+                 "reading the compacted count");
     return count;
 }
 
 void ClPrimitives::box_chunk_starts(const cl::Buffer& seg_count, std::size_t segments,
                                     const cl::Buffer& chunk_start) {
-    enqueue_kernel(device_.queue(), kernels_.count_box_chunks, segments, seg_count,
-                   cl_uint(segments), chunk_start);
+    enqueue_kernel(device_, kernels_.count_box_chunks, segments, seg_count, cl_uint(segments),
+                   chunk_start);
     exclusive_scan(chunk_start, chunk_start, segments);
 }
 
@@ -104,10 +110,10 @@ void ClPrimitives::reduce_box_segments(const cl::Buffer& boxes, const cl::Buffer
                                        const cl::Buffer& seg_count, const cl::Buffer& chunk_start,
                                        std::size_t segments, std::size_t total_chunks,
                                        const cl::Buffer& chunk_boxes, const cl::Buffer& seg_boxes) {
-    enqueue_kernel(device_.queue(), kernels_.reduce_box_chunks, total_chunks, boxes, seg_start,
-                   seg_count, chunk_start, cl_uint(segments), cl_uint(total_chunks), chunk_boxes);
-    enqueue_kernel(device_.queue(), kernels_.reduce_box_segments, segments, chunk_boxes,
-                   chunk_start, cl_uint(segments), seg_boxes);
+    enqueue_kernel(device_, kernels_.reduce_box_chunks, total_chunks, boxes, seg_start, seg_count,
+                   chunk_start, cl_uint(segments), cl_uint(total_chunks), chunk_boxes);
+    enqueue_kernel(device_, kernels_.reduce_box_segments, segments, chunk_boxes, chunk_start,
+                   cl_uint(segments), seg_boxes);
 }
 
 }  // namespace kdray

@@ -5,17 +5,23 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 
 #include <CL/opencl.hpp>
 
 #include "cl/runtime/device.h"
+#include "cl/runtime/device_memory.h"
 
 namespace kdray {
 
 /// Cheap to construct: the program and its kernels are made once per device and kept.
 class ClPrimitives {
   public:
-    explicit ClPrimitives(ClDevice& device);
+    /// The scratch arrays (a scan's chunk sums, a compaction's positions) come from `memory`, a
+    /// build's, which counts them and recycles them from call to call; without one, from a
+    /// DeviceMemory of the primitives' own (which takes from the device's BufferPool). A fresh
+    /// buffer per scan was an allocation and, on a CPU device, fresh pages per call.
+    explicit ClPrimitives(ClDevice& device, DeviceMemory* memory = nullptr);
 
     /// out[k] = in[0] + ... + in[k-1] for k in [0, n], so out holds n + 1 uints and out[n] is the
     /// total. out may be in. n may be 0 (out[0] = 0). Throws Error when out is smaller.
@@ -53,6 +59,8 @@ class ClPrimitives {
   private:
     struct Kernels;
     ClDevice& device_;
+    std::unique_ptr<DeviceMemory> own_memory_;  // only when no memory was given
+    DeviceMemory& memory_;
     // Created once per device (cached_kernels), shared by every ClPrimitives of the device.
     Kernels& kernels_;
 };
