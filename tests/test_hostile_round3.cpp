@@ -1,0 +1,122 @@
+// test_hostile_round3.cpp — the third round of hostile input (issue #29): numbers in files that
+// overflow where they are used, JSON nested past any reasonable depth or with fields of the wrong
+// type, command-line numbers that overflow or are NaN, outputs that cannot be written, and files
+// that look like kdray's temporaries but are the user's. Each runs the binary: one `kdray: error:`
+// line naming the file and the problem, exit 1 (2 for usage), no crash, nothing lost.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/image.h"
+#include "core/image_codec.h"
+#include "tests/support.h"
+
+namespace fs = std::filesystem;
+using namespace kdray::test;
+
+namespace {
+
+// Runs that should end at once get 60 s: a hang fails the test instead of stalling CI.
+constexpr int kNoHang = 60;
+
+void check_error(const CommandResult& r, int status, std::initializer_list<std::string> mentions) {
+    INFO("status " << r.status << ", stderr: " << r.err);
+    CHECK(r.status == status);
+    CHECK(r.err.rfind("kdray: error: ", 0) == 0);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    for (const std::string& m : mentions) CHECK_MESSAGE(r.err.find(m) != std::string::npos, m);
+}
+
+/// A unit quad facing +z with material `t` (Kd 1, map_Kd tex.png, a 2x2 texture) whose four
+/// corners have the texture coordinate `uv` ("" for none), and a 16x12 camera on it.
+struct TexturedQuad {
+    fs::path dir, obj, camera;
+};
+
+TexturedQuad textured_quad(const std::string& name, const std::string& uv) {
+    TexturedQuad q;
+    q.dir = fresh_temp_dir(name);
+    write_text_file(q.dir / "quad.mtl", "newmtl t\nKd 1 1 1\nmap_Kd tex.png\n");
+    kdray::Image texture;
+    texture.width = texture.height = 2;
+    texture.rgb = {0.2f, 0.4f, 0.6f, 0.8f, 0.1f, 0.3f, 0.5f, 0.7f, 0.9f, 0.25f, 0.75f, 0.5f};
+    kdray::write_image(q.dir / "tex.png", texture);
+    std::string text = "mtllib quad.mtl\nusemtl t\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+    if (uv.empty()) {
+        text += "f 1 2 3 4\n";
+    } else {
+        for (int i = 0; i < 4; ++i) text += "vt " + uv + "\n";
+        text += "f 1/1 2/2 3/3 4/4\n";
+    }
+    q.obj = write_text_file(q.dir / "quad.obj", text);
+    q.camera = write_text_file(
+        q.dir / "cam.json",
+        R"({"image":{"width":16,"height":12},"camera":{"position":[0.5,0.5,2],"look_at":[0.5,0.5,0]}})");
+    return q;
+}
+
+CommandResult render(const fs::path& obj, const fs::path& out, const fs::path& camera,
+                     const std::string& path, std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {
+        "render",    obj.string(), "-o",       out.string(), "--camera", camera.string(),
+        "--builder", path,         "--tracer", path,         "-q"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_kdray(args, kNoHang);
+}
+
+}  // namespace
+
+TEST_CASE("vt values that are not finite floats are refused with the file and line") {
+    // tinyobjloader reads `1e39` as inf and `0e725` as 0 * 5^725 = NaN; a NaN u became INT_MIN in
+    // the texture lookup and both tracers crashed (exit 139) reading outside the texture.
+    for (const char* uv : {"1e39 0", "0 0e725", "nan 0", "0.5 -inf"}) {
+        CAPTURE(uv);
+        const TexturedQuad q = textured_quad("round3-vt", uv);
+        check_error(render(q.obj, q.dir / "out", q.camera, "reference"), 1,
+                    {"quad.obj:7", "texture coordinate"});
+        CHECK_FALSE(fs::exists(q.dir / "out" / "quad.png"));
+        fs::remove_all(q.dir);
+    }
+}
+
+TEST_CASE("vt corners that overflow when interpolated render untextured on both tracers") {
+    // Every corner at FLT_MAX is a finite float, but w*t0 + u*t2 + v*t4 rounds past it to inf at
+    // some hits, and inf - floor(inf) is NaN: the lookup must not turn it into a texel index
+    // (both tracers crashed). Such a hit is untextured, as the same quad without vt renders; at
+    // the other hits the huge finite (u, v) wraps to (0, 0), as a quad whose corners are all
+    // (0, 0) renders. Every pixel must be one of the two, and some must be untextured.
+    for (const char* path : {"reference", "opencl"}) {
+        CAPTURE(path);
+        auto rendered = [&](const std::string& uv) {
+            const TexturedQuad q = textured_quad("round3-vt-max", uv);
+            const CommandResult r = render(q.obj, q.dir / "out", q.camera, path);
+            INFO("vt " << uv << ": stderr " << r.err);
+            CHECK(r.status == 0);
+            kdray::DecodedImage image;
+            if (r.status == 0) image = kdray::read_image(q.dir / "out" / "quad.png");
+            fs::remove_all(q.dir);
+            return image;
+        };
+        const kdray::DecodedImage image = rendered("3.4028234e38 3.4028234e38");
+        const kdray::DecodedImage plain = rendered("");
+        const kdray::DecodedImage origin = rendered("0 0");
+        REQUIRE(image.values.size() == 16u * 12u * std::size_t(image.channels));
+        REQUIRE(plain.values.size() == image.values.size());
+        REQUIRE(origin.values.size() == image.values.size());
+        const std::size_t c = std::size_t(image.channels);
+        int untextured = 0, mismatched = 0;
+        for (std::size_t p = 0; p < image.values.size(); p += c) {
+            auto same = [&](const kdray::DecodedImage& other) {
+                return std::equal(image.values.begin() + p, image.values.begin() + p + c,
+                                  other.values.begin() + p);
+            };
+            if (same(plain) && !same(origin)) ++untextured;
+            if (!same(plain) && !same(origin)) ++mismatched;
+        }
+        CHECK(mismatched == 0);
+        CHECK(untextured > 0);
+    }
+}
