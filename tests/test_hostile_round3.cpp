@@ -120,3 +120,84 @@ TEST_CASE("vt corners that overflow when interpolated render untextured on both 
         CHECK(untextured > 0);
     }
 }
+
+TEST_CASE("JSON nested past kdray's depth budget is refused before it is built") {
+    // 100,000 nested `[` in 200 KB: every consumer of the parsed value (its message, dump(), its
+    // destruction) recursed once a level, and `kdray stats` and every render into the folder
+    // overflowed the stack. Refused at depth 64, naming the file.
+    const fs::path dir = fresh_temp_dir("round3-deep-json");
+    const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+    const fs::path obj = write_text_file(dir / "tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const fs::path camera = write_text_file(
+        dir / "cam.json",
+        R"({"image":{"width":16,"height":12},"camera":{"position":[0.3,0.3,3],"look_at":[0.3,0.3,0]}})");
+    SUBCASE("a stats.json, read by kdray stats and by a render into its folder") {
+        const fs::path out = dir / "out";
+        write_text_file(out / "stats.json", R"({"summary":{},"frames":[{"frame":)" + deep + "}]}");
+        check_error(run_kdray({"stats", out.string()}, kNoHang), 1,
+                    {"stats.json", "nested more than 64 levels"});
+        check_error(render(obj, out, camera, "reference"), 1,
+                    {"stats.json", "nested more than 64 levels"});
+        CHECK_FALSE(fs::exists(out / "tri.png"));
+    }
+    SUBCASE("a render file") {
+        const fs::path deep_camera =
+            write_text_file(dir / "deep.json", R"({"camera":)" + deep + "}");
+        check_error(render(obj, dir / "out", deep_camera, "reference"), 1,
+                    {"deep.json", "nested more than 64 levels"});
+    }
+    SUBCASE("64 levels are still read: the budget counts the levels a file has") {
+        const std::string nested = std::string(63, '[') + "1" + std::string(63, ']');
+        const fs::path ok = write_text_file(dir / "ok.json", R"({"camera":)" + nested + "}");
+        // Parsed, then refused by the render file's own check of what camera is.
+        const CommandResult r = render(obj, dir / "out", ok, "reference");
+        check_error(r, 1, {"ok.json", "camera"});
+        CHECK(r.err.find("nested") == std::string::npos);
+    }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("stats.json fields of the wrong type are named before anything renders") {
+    // A run merges its frames into the folder's stats.json; a field kdray reads back that is not
+    // what it writes failed only after every frame had rendered, with a raw
+    // `[json.exception.type_error.302]` naming no file.
+    const fs::path dir = fresh_temp_dir("round3-stats-types");
+    const fs::path obj = write_text_file(dir / "tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const fs::path camera = write_text_file(
+        dir / "cam.json",
+        R"({"image":{"width":16,"height":12},"camera":{"position":[0.3,0.3,3],"look_at":[0.3,0.3,0]}})");
+    const fs::path out = dir / "out";
+    struct Case {
+        std::string stats, field;
+    };
+    for (const Case& c : std::vector<Case>{
+             {R"({"summary":{},"frames":[{"frame":0,"input":5}]})", "frames[0].input"},
+             {R"({"summary":{},"frames":[{"frame":0,"image":[]}]})", "frames[0].image"},
+             {R"({"summary":{},"frames":[],"builder":5})", "builder"},
+             {R"({"summary":{},"frames":[],"tracer":{}})", "tracer"},
+             {R"({"summary":{},"frames":[],"runs":[3]})", "runs[0]"},
+             {R"({"summary":{},"frames":[],"failed_frames":[{"frame":1,"input":false}]})",
+              "failed_frames[0].input"}}) {
+        CAPTURE(c.stats);
+        write_text_file(out / "stats.json", c.stats);
+        check_error(render(obj, out, camera, "reference"), 1, {"stats.json: " + c.field});
+        CHECK_FALSE(fs::exists(out / "tri.png"));
+        check_error(run_kdray({"stats", out.string()}, kNoHang), 1, {"stats.json: " + c.field});
+    }
+    SUBCASE("a message quotes at most 40 bytes of a field") {
+        write_text_file(out / "stats.json", R"({"summary":{},"frames":[{"frame":")" +
+                                                std::string(100000, 'x') + "\"}]}");
+        const CommandResult r = run_kdray({"stats", out.string()}, kNoHang);
+        check_error(r, 1, {"frames[0].frame", "not a frame number"});
+        CHECK(r.err.size() < 300);
+    }
+    SUBCASE("a stats.json that is a symbolic link is refused before the run renders") {
+        const fs::path elsewhere =
+            write_text_file(dir / "elsewhere.json", R"({"summary":{},"frames":[]})");
+        fs::remove(out / "stats.json");
+        fs::create_symlink(elsewhere, out / "stats.json");
+        check_error(render(obj, out, camera, "reference"), 1, {"stats.json", "symbolic link"});
+        CHECK_FALSE(fs::exists(out / "tri.png"));
+    }
+    fs::remove_all(dir);
+}
