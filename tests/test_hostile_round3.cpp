@@ -201,3 +201,42 @@ TEST_CASE("stats.json fields of the wrong type are named before anything renders
     }
     fs::remove_all(dir);
 }
+
+TEST_CASE("--frames steps and ends near 2^63 end the range instead of overflowing") {
+    // `f += step` past the last frame overflowed a signed 64-bit integer: 2:2:2^63-2 crashed
+    // (exit 139) and other huge steps wrapped to a negative frame, reported as an empty name.
+    // Each range below picks exactly the frames listed, out of f_0 .. f_2.
+    const fs::path dir = fresh_temp_dir("round3-frames");
+    for (int f = 0; f < 3; ++f)
+        write_text_file(dir / "in" / ("f_" + std::to_string(f) + ".obj"),
+                        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    struct Case {
+        std::string frames;
+        std::vector<int> expected;
+    };
+    for (const Case& c : std::vector<Case>{{"2:2:9223372036854775806", {2}},
+                                           {"0::9223372036854775807", {0}},
+                                           {"1:9223372036854775807:9223372036854775807", {1}},
+                                           {"0:9223372036854775807:2", {0, 2}}}) {
+        CAPTURE(c.frames);
+        const fs::path out = dir / "out";
+        fs::remove_all(out);
+        const CommandResult r =
+            run_kdray({"render", (dir / "in" / "f_*.obj").string(), "-o", out.string(), "--builder",
+                       "reference", "--tracer", "reference", "-q", "--frames", c.frames},
+                      kNoHang);
+        INFO("stderr: " << r.err);
+        REQUIRE(r.status == 0);
+        std::vector<int> numbers;
+        const nlohmann::json stats = read_json(out / "stats.json");
+        for (const auto& f : stats["frames"])
+            numbers.push_back(f["frame"].get<int>());
+        CHECK(numbers == c.expected);
+    }
+    // Past int64 is not a number kdray reads: a usage error naming the option.
+    check_error(run_kdray({"render", (dir / "in" / "f_*.obj").string(), "-o", (dir / "x").string(),
+                           "--frames", "0:1:9223372036854775808"},
+                          kNoHang),
+                2, {"--frames"});
+    fs::remove_all(dir);
+}
