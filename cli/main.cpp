@@ -8,6 +8,7 @@
 #endif
 
 #include <algorithm>
+#include <cmath>
 #include <exception>
 #include <iostream>
 #include <new>
@@ -24,6 +25,18 @@
 namespace {
 
 using namespace kdray::cli;
+
+/// A number option that must be finite: CLI11's Range and NonNegativeNumber let nan through (every
+/// comparison with it is false), and `compare --tolerance nan` said an all-0 and an all-1 image
+/// agree.
+const CLI::Validator kFiniteNumber(
+    [](std::string& text) -> std::string {
+        double value = 0;
+        if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value))
+            return "'" + text + "' is not a finite number";
+        return {};
+    },
+    "FINITE");
 
 /// The tree's options (group "Tree") and the device's ("Device"). `--max-depth` is refused with
 /// the names that replace it: on render it read as the ray depth and set the tree's.
@@ -265,12 +278,14 @@ int main(int argc, char** argv) {
         ->add_option("--tolerance", compare.tolerance,
                      "images: a pixel with a channel differing by more than this is 'over' "
                      "(PNG values in [0, 1], EXR linear)")
+        ->check(kFiniteNumber)
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     compare_app
         ->add_option("--max-fraction", compare.max_fraction,
                      "the largest share of pixels that may disagree (AOVs: mismatch_fraction; "
                      "images: pixels over the tolerance). Default: 1e-4 for AOVs, 0 for images")
+        ->check(kFiniteNumber)
         ->check(CLI::Range(0.0, 1.0));
 
     try {

@@ -240,3 +240,32 @@ TEST_CASE("--frames steps and ends near 2^63 end the range instead of overflowin
                 2, {"--frames"});
     fs::remove_all(dir);
 }
+
+TEST_CASE("compare --tolerance and --max-fraction must be finite numbers") {
+    // Every comparison with NaN is false, so `--tolerance nan` counted no pixel as over it and an
+    // all-0 and an all-1 image agreed (exit 0); `--max-fraction nan` was accepted the same way.
+    const fs::path dir = fresh_temp_dir("round3-compare-nan");
+    kdray::Image black, white;
+    black.width = white.width = 4;
+    black.height = white.height = 3;
+    black.rgb.assign(36, 0.0f);
+    white.rgb.assign(36, 1.0f);
+    const fs::path a = dir / "black.png", b = dir / "white.png";
+    kdray::write_image(a, black);
+    kdray::write_image(b, white);
+    for (const std::vector<std::string>& option : {std::vector<std::string>{"--tolerance", "nan"},
+                                                   {"--tolerance", "inf"},
+                                                   {"--tolerance", "-nan"},
+                                                   {"--max-fraction", "nan"}}) {
+        CAPTURE(option[0] + " " + option[1]);
+        check_error(run_kdray({"compare", a.string(), b.string(), option[0], option[1]}, kNoHang),
+                    2, {option[0], "not a finite number"});
+    }
+    // Finite values still decide: a tolerance of 2 lets every pixel agree, and the default
+    // tolerance none.
+    CHECK(run_kdray({"compare", a.string(), b.string(), "--tolerance", "2"}, kNoHang).status == 0);
+    CHECK(run_kdray({"compare", a.string(), b.string(), "--max-fraction", "1"}, kNoHang).status ==
+          0);
+    CHECK(run_kdray({"compare", a.string(), b.string()}, kNoHang).status == 1);
+    fs::remove_all(dir);
+}
