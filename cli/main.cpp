@@ -8,7 +8,11 @@
 #endif
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
 #include <exception>
 #include <iostream>
 #include <new>
@@ -157,8 +161,26 @@ std::vector<std::string> long_option_names(const CLI::App& app) {
 
 }  // namespace
 
+/// Flushes what the command printed on stdout; throws Error when any of it could not be written
+/// (`kdray build x.obj --json > /dev/full` said nothing and exited 0).
+void finish_stdout() {
+    // std::cout writes through stdio's stdout: its flush is stdout's, whose errno says why.
+    errno = 0;
+    std::cout.flush();
+    const bool flushed = std::fflush(stdout) == 0;
+    const int error = errno;
+    if (flushed && !std::ferror(stdout) && !std::cout.fail()) return;
+    throw kdray::Error(std::string("cannot write to standard output: ") +
+                       (error != 0 ? std::strerror(error) : "write error"));
+}
+
 int main(int argc, char** argv) {
     keep_freed_memory_for_reuse();
+    // A reader that goes away (`kdray render ... 2>&1 | head -3`) must not kill a run by SIGPIPE
+    // mid-frame, leaving images without their stats.json: a write to it fails with EPIPE
+    // instead, which the log treats as the end of logging (cli/log.cpp) and finish_stdout as an
+    // error.
+    std::signal(SIGPIPE, SIG_IGN);
     CLI::App app{"kdray: kd-trees built on an OpenCL device (Zhou et al. 2008), ray traced"};
     app.require_subcommand(1);
     app.set_version_flag("--version", std::string("kdray ") + kdray::kVersion +
@@ -337,10 +359,13 @@ int main(int argc, char** argv) {
     }
 
     try {
-        if (*build_app) return run_build(build);
-        if (*render_app) return run_render(render);
-        if (*stats_app) return run_stats(stats);
-        if (*compare_app) return run_compare(compare);
+        int status = 0;
+        if (*build_app) status = run_build(build);
+        if (*render_app) status = run_render(render);
+        if (*stats_app) status = run_stats(stats);
+        if (*compare_app) status = run_compare(compare);
+        finish_stdout();
+        return status;
     } catch (const kdray::UsageError& e) {
         std::cerr << "kdray: error: " << e.what() << "\n";
         return 2;

@@ -4,6 +4,11 @@
 // that look like kdray's temporaries but are the user's. Each runs the binary: one `kdray: error:`
 // line naming the file and the problem, exit 1 (2 for usage), no crash, nothing lost.
 #include <doctest/doctest.h>
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
 
 #include <algorithm>
 #include <filesystem>
@@ -65,6 +70,28 @@ CommandResult render(const fs::path& obj, const fs::path& out, const fs::path& c
         "--builder", path,         "--tracer", path,         "-q"};
     args.insert(args.end(), extra.begin(), extra.end());
     return run_kdray(args, kNoHang);
+}
+
+/// Runs kdray with `args`, its stdout on `out_fd` and its stderr on `err_fd`, SIGPIPE at its
+/// default as a shell leaves it; the wait status.
+int run_with_descriptors(const std::vector<std::string>& args, int out_fd, int err_fd) {
+    std::vector<char*> argv;
+    std::string binary = KDRAY_BINARY;
+    argv.push_back(binary.data());
+    std::vector<std::string> copies = args;
+    for (std::string& a : copies) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+        std::signal(SIGPIPE, SIG_DFL);
+        ::dup2(out_fd, STDOUT_FILENO);
+        ::dup2(err_fd, STDERR_FILENO);
+        ::execv(argv[0], argv.data());
+        ::_exit(127);
+    }
+    int status = -1;
+    ::waitpid(pid, &status, 0);
+    return status;
 }
 
 }  // namespace
@@ -267,5 +294,62 @@ TEST_CASE("compare --tolerance and --max-fraction must be finite numbers") {
     CHECK(run_kdray({"compare", a.string(), b.string(), "--max-fraction", "1"}, kNoHang).status ==
           0);
     CHECK(run_kdray({"compare", a.string(), b.string()}, kNoHang).status == 1);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("stdout that cannot be written is an error; a closed stderr pipe ends only the logging") {
+    const fs::path dir = fresh_temp_dir("round3-output-streams");
+    const fs::path obj = write_text_file(dir / "tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    SUBCASE("stdout on a full device: exit 1 with one error line, not a silent exit 0") {
+        // `kdray build x.obj --json > /dev/full` lost the report and exited 0.
+        const int full = ::open("/dev/full", O_WRONLY | O_CLOEXEC);
+        REQUIRE(full >= 0);
+        const fs::path err_path = dir / "err.txt";
+        for (const std::vector<std::string>& args :
+             {std::vector<std::string>{"build", obj.string(), "--builder", "reference", "--json"},
+              {"build", obj.string(), "--builder", "reference"},
+              {"stats", obj.string(), "--builder", "reference", "--json"}}) {
+            CAPTURE(args[0] + " " + args.back());
+            const int err =
+                ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+            REQUIRE(err >= 0);
+            const int status = run_with_descriptors(args, full, err);
+            ::close(err);
+            REQUIRE(WIFEXITED(status));
+            CommandResult r;
+            r.status = WEXITSTATUS(status);
+            r.err = read_file(err_path);
+            // build logs its device and compile lines at info: only the last line is the error.
+            const std::size_t last = r.err.rfind("kdray: error: ");
+            REQUIRE(last != std::string::npos);
+            r.err = r.err.substr(last);
+            check_error(r, 1, {"standard output", "No space left on device"});
+        }
+        ::close(full);
+    }
+    SUBCASE("stderr a pipe whose reader has gone: the run finishes its frames and stats.json") {
+        // `kdray render ... 2>&1 | head -3` died of SIGPIPE (exit 141) at its first message after
+        // head left, with images written and no stats.json. The reader here is gone before the
+        // run starts, so that every message fails, not only those after the third line.
+        for (int f = 0; f < 4; ++f)
+            write_text_file(dir / "in" / ("f_" + std::to_string(f) + ".obj"),
+                            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        int fds[2];
+        REQUIRE(::pipe2(fds, O_CLOEXEC) == 0);
+        ::close(fds[0]);
+        const fs::path out = dir / "out";
+        const int status = run_with_descriptors(
+            {"render", (dir / "in" / "f_*.obj").string(), "-o", out.string(), "--builder",
+             "reference", "--tracer", "reference", "--log-level", "info"},
+            fds[1], fds[1]);
+        ::close(fds[1]);
+        CHECK_FALSE(WIFSIGNALED(status));
+        REQUIRE(WIFEXITED(status));
+        CHECK(WEXITSTATUS(status) == 0);
+        const nlohmann::json stats = read_json(out / "stats.json");
+        REQUIRE(stats.contains("frames"));
+        CHECK(stats["frames"].size() == 4u);
+        for (int f = 0; f < 4; ++f) CHECK(fs::exists(out / ("f_" + std::to_string(f) + ".png")));
+    }
     fs::remove_all(dir);
 }
