@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "core/atomic_file.h"
 #include "core/image.h"
 #include "core/image_codec.h"
 #include "tests/support.h"
@@ -351,5 +352,55 @@ TEST_CASE("stdout that cannot be written is an error; a closed stderr pipe ends 
         CHECK(stats["frames"].size() == 4u);
         for (int f = 0; f < 4; ++f) CHECK(fs::exists(out / ("f_" + std::to_string(f) + ".png")));
     }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("stale-temporary cleanup removes only kdray's own, of this host, of a process gone") {
+    // Any `.NAME.tmpN[.ext]` whose process N did not run was taken for a stale temporary: a
+    // user's `.holiday.tmp2023.tar` was deleted, an input so named vanished before it loaded, and
+    // shards on two nodes rendering into one shared folder deleted each other's live
+    // temporaries. kdray's temporaries now carry a marker, the host and a random part.
+    const fs::path dir = fresh_temp_dir("round3-temporaries");
+    const fs::path out = dir / "out";
+    const fs::path obj = write_text_file(dir / "tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const fs::path camera = write_text_file(
+        dir / "cam.json",
+        R"({"image":{"width":16,"height":12},"camera":{"position":[0.3,0.3,3],"look_at":[0.3,0.3,0]}})");
+    const std::string dead = "2147483600";  // above any pid_max: no process has it
+    // This host's and this process's temporary name for out/frame.png, and variants of it.
+    const std::string live = kdray::temporary_path(out / "frame.png").filename().string();
+    const std::string pid = "@" + std::to_string(::getpid()) + "@";
+    const std::size_t pid_at = live.find(pid);
+    REQUIRE(pid_at != std::string::npos);
+    REQUIRE(live.find(".kdray.tmp@") != std::string::npos);
+    std::string stale = live, other_host = live;
+    stale.replace(pid_at, pid.size(), "@" + dead + "@");
+    other_host.replace(live.find(".kdray.tmp@") + 11, pid_at - live.find(".kdray.tmp@") - 11,
+                       "another-node");
+    other_host.replace(other_host.find(pid), pid.size(), "@" + dead + "@");
+    const std::vector<std::string> kept = {
+        ".holiday.tmp2023.tar",            // the reported loss: a user's file
+        ".frame.png.tmp" + dead + ".png",  // kdray's old pattern, now a user's name
+        ".notes.kdray.tmp@x",              // the marker without the fields after it
+        other_host,                        // a dead pid on another node means nothing here
+        live,                              // a running process (this test) is writing it
+        stale.substr(0, stale.size() - 4) + "Z.png"};  // not 16 hex digits of kdray's
+    for (const std::string& name : kept) write_text_file(out / name, "keep " + name);
+    write_text_file(out / stale, "half");
+    // An input named like an old temporary, inside the folder: it loads and renders.
+    const fs::path input = write_text_file(out / (".scene.tmp" + dead + ".obj"),
+                                           "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const CommandResult r =
+        run_kdray({"render", input.string(), "-o", out.string(), "--camera", camera.string(),
+                   "--builder", "reference", "--tracer", "reference", "-q", "--name", "scene"},
+                  kNoHang);
+    INFO("stderr: " << r.err);
+    CHECK(r.status == 0);
+    CHECK(fs::exists(out / "scene.png"));
+    for (const std::string& name : kept) {
+        CAPTURE(name);
+        CHECK(read_file(out / name) == "keep " + name);
+    }
+    CHECK_FALSE(fs::exists(out / stale));
     fs::remove_all(dir);
 }
