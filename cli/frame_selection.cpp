@@ -1,5 +1,6 @@
 #include "cli/frame_selection.h"
 
+#include <algorithm>
 #include <charconv>
 #include <optional>
 
@@ -54,9 +55,16 @@ std::vector<std::size_t> select_frames(std::size_t count, const std::string& fra
             throw UsageError("--shard " + shard + ": expected I/N with 0 <= I < N");
     }
     std::vector<std::size_t> selected;
+    // The last frame that exists and was asked for; the step is taken only while it stays at or
+    // below it, so that a step near 2^63 ends the range instead of overflowing into a negative
+    // frame (exit 139, or a frame number of 2^64 - N).
+    const long long end = std::min(last, static_cast<long long>(count) - 1);
     long long position = 0;  // among the frames --frames picked
-    for (long long f = first; f <= last && f < static_cast<long long>(count); f += step, ++position)
+    for (long long f = first; f <= end; ++position) {
         if (position % shard_count == shard_index) selected.push_back(static_cast<std::size_t>(f));
+        if (step > end - f) break;
+        f += step;
+    }
     return selected;
 }
 

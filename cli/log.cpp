@@ -17,6 +17,14 @@ namespace {
 // One lock for the sink and the progress line: a message and a redraw never interleave.
 std::mutex stderr_mutex;
 std::string progress_text;  // what the progress line shows now; empty when none is shown
+// Set once a write to stderr failed (its reader went away: EPIPE, SIGPIPE being ignored; or a
+// full disk): the run goes on and finishes its outputs, without logging.
+bool stderr_lost = false;
+
+/// Flushes stderr after a message or a redraw; a failed flush ends logging for the run.
+void flush_or_stop() {
+    if (std::fflush(stderr) != 0 || std::ferror(stderr)) stderr_lost = true;
+}
 
 const char* prefix(spdlog::level::level_enum level) {
     switch (level) {
@@ -38,15 +46,19 @@ class StderrSink final : public spdlog::sinks::base_sink<spdlog::details::null_m
   protected:
     void sink_it_(const spdlog::details::log_msg& msg) override {
         std::lock_guard<std::mutex> lock(stderr_mutex);
+        if (stderr_lost) return;
         // "\r\033[K": back to the start of the progress line and clear it.
         if (!progress_text.empty()) std::fputs("\r\033[K", stderr);
         std::fputs(prefix(msg.level), stderr);
         std::fwrite(msg.payload.data(), 1, msg.payload.size(), stderr);
         std::fputc('\n', stderr);
         if (!progress_text.empty()) std::fputs(progress_text.c_str(), stderr);
-        std::fflush(stderr);
+        flush_or_stop();
     }
-    void flush_() override { std::fflush(stderr); }
+    void flush_() override {
+        std::lock_guard<std::mutex> lock(stderr_mutex);
+        if (!stderr_lost) flush_or_stop();
+    }
 };
 
 }  // namespace
@@ -86,17 +98,18 @@ void ProgressLine::show(std::size_t done, std::size_t total, double elapsed_ms) 
     std::snprintf(text, sizeof text, "kdray: frame %zu/%zu  %.2f fps  ETA %.0f s", done, total, fps,
                   eta_s);
     std::lock_guard<std::mutex> lock(stderr_mutex);
+    if (stderr_lost) return;
     progress_text = text;
     std::fprintf(stderr, "\r\033[K%s", text);
-    std::fflush(stderr);
+    flush_or_stop();
 }
 
 void ProgressLine::finish() {
     std::lock_guard<std::mutex> lock(stderr_mutex);
-    if (progress_text.empty()) return;
+    if (progress_text.empty() || stderr_lost) return;
     progress_text.clear();
     std::fputc('\n', stderr);
-    std::fflush(stderr);
+    flush_or_stop();
 }
 
 }  // namespace kdray::cli

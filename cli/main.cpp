@@ -8,6 +8,11 @@
 #endif
 
 #include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
 #include <exception>
 #include <iostream>
 #include <new>
@@ -24,6 +29,18 @@
 namespace {
 
 using namespace kdray::cli;
+
+/// A number option that must be finite: CLI11's Range and NonNegativeNumber let nan through (every
+/// comparison with it is false), and `compare --tolerance nan` said an all-0 and an all-1 image
+/// agree.
+const CLI::Validator kFiniteNumber(
+    [](std::string& text) -> std::string {
+        double value = 0;
+        if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value))
+            return "'" + text + "' is not a finite number";
+        return {};
+    },
+    "FINITE");
 
 /// The tree's options (group "Tree") and the device's ("Device"). `--max-depth` is refused with
 /// the names that replace it: on render it read as the ray depth and set the tree's.
@@ -144,8 +161,26 @@ std::vector<std::string> long_option_names(const CLI::App& app) {
 
 }  // namespace
 
+/// Flushes what the command printed on stdout; throws Error when any of it could not be written
+/// (`kdray build x.obj --json > /dev/full` said nothing and exited 0).
+void finish_stdout() {
+    // std::cout writes through stdio's stdout: its flush is stdout's, whose errno says why.
+    errno = 0;
+    std::cout.flush();
+    const bool flushed = std::fflush(stdout) == 0;
+    const int error = errno;
+    if (flushed && !std::ferror(stdout) && !std::cout.fail()) return;
+    throw kdray::Error(std::string("cannot write to standard output: ") +
+                       (error != 0 ? std::strerror(error) : "write error"));
+}
+
 int main(int argc, char** argv) {
     keep_freed_memory_for_reuse();
+    // A reader that goes away (`kdray render ... 2>&1 | head -3`) must not kill a run by SIGPIPE
+    // mid-frame, leaving images without their stats.json: a write to it fails with EPIPE
+    // instead, which the log treats as the end of logging (cli/log.cpp) and finish_stdout as an
+    // error.
+    std::signal(SIGPIPE, SIG_IGN);
     CLI::App app{"kdray: kd-trees built on an OpenCL device (Zhou et al. 2008), ray traced"};
     app.require_subcommand(1);
     app.set_version_flag("--version", std::string("kdray ") + kdray::kVersion +
@@ -265,12 +300,14 @@ int main(int argc, char** argv) {
         ->add_option("--tolerance", compare.tolerance,
                      "images: a pixel with a channel differing by more than this is 'over' "
                      "(PNG values in [0, 1], EXR linear)")
+        ->check(kFiniteNumber)
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     compare_app
         ->add_option("--max-fraction", compare.max_fraction,
                      "the largest share of pixels that may disagree (AOVs: mismatch_fraction; "
                      "images: pixels over the tolerance). Default: 1e-4 for AOVs, 0 for images")
+        ->check(kFiniteNumber)
         ->check(CLI::Range(0.0, 1.0));
 
     try {
@@ -322,10 +359,13 @@ int main(int argc, char** argv) {
     }
 
     try {
-        if (*build_app) return run_build(build);
-        if (*render_app) return run_render(render);
-        if (*stats_app) return run_stats(stats);
-        if (*compare_app) return run_compare(compare);
+        int status = 0;
+        if (*build_app) status = run_build(build);
+        if (*render_app) status = run_render(render);
+        if (*stats_app) status = run_stats(stats);
+        if (*compare_app) status = run_compare(compare);
+        finish_stdout();
+        return status;
     } catch (const kdray::UsageError& e) {
         std::cerr << "kdray: error: " << e.what() << "\n";
         return 2;

@@ -8,7 +8,9 @@
 #include <charconv>
 #include <cstdio>
 #include <cstring>
+#include <random>
 #include <string>
+#include <string_view>
 #include <system_error>
 
 #include "core/error.h"
@@ -23,23 +25,70 @@ namespace {
 /// The longest file name most file systems hold (NAME_MAX on Linux).
 constexpr std::size_t kNameMax = 255;
 
-/// The process id in a temporary name made by temporary_path, or 0 when `name` is not one.
+/// What marks a temporary as kdray's, and separates its fields: `@` is in no host name, and no
+/// user names a file `.NAME.kdray.tmp@HOST@PID@RANDOM`.
+constexpr std::string_view kTemporaryMarker = ".kdray.tmp@";
+
+/// This machine's host name as a temporary name holds it: at most 64 bytes of letters, digits,
+/// '.', '-' and '_' (anything else, '@' included, becomes '_').
+const std::string& host_tag() {
+    static const std::string tag = [] {
+        char host[256] = {};
+        if (::gethostname(host, sizeof host - 1) != 0 || host[0] == '\0')
+            std::snprintf(host, sizeof host, "unknown-host");
+        std::string t;
+        for (const char* c = host; *c != '\0' && t.size() < 64; ++c) {
+            const bool plain = (*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') ||
+                               (*c >= '0' && *c <= '9') || *c == '.' || *c == '-' || *c == '_';
+            t += plain ? *c : '_';
+        }
+        return t;
+    }();
+    return tag;
+}
+
+/// The process id in a temporary name that temporary_path made on this host, or 0 when `name`
+/// is anything else: the user's `.holiday.tmp2023.tar`, or another node's temporary in a folder
+/// that nodes share (its process id means nothing here).
 long temporary_owner(const std::string& name) {
     if (name.empty() || name[0] != '.') return 0;
-    const std::size_t at = name.rfind(".tmp");
+    const std::size_t at = name.rfind(kTemporaryMarker);
     if (at == std::string::npos || at == 0) return 0;
+    std::string_view rest = std::string_view(name).substr(at + kTemporaryMarker.size());
+    const std::string& host = host_tag();
+    if (rest.substr(0, host.size()) != host || rest.size() <= host.size() ||
+        rest[host.size()] != '@')
+        return 0;
+    rest.remove_prefix(host.size() + 1);
     long pid = 0;
-    const char* begin = name.data() + at + 4;
-    const auto [end, ec] = std::from_chars(begin, name.data() + name.size(), pid);
-    if (ec != std::errc() || end == begin || (*end != '\0' && *end != '.')) return 0;
+    const auto [end, ec] = std::from_chars(rest.data(), rest.data() + rest.size(), pid);
+    if (ec != std::errc() || end == rest.data() || end == rest.data() + rest.size() || *end != '@')
+        return 0;
+    rest.remove_prefix(std::size_t(end - rest.data()) + 1);
+    // 16 hex digits, then the target's extension or nothing.
+    if (rest.size() < 16) return 0;
+    for (char c : rest.substr(0, 16))
+        if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) return 0;
+    if (rest.size() > 16 && rest[16] != '.') return 0;
     return pid;
 }
 
 }  // namespace
 
 fs::path temporary_path(const fs::path& path) {
+    // A random part as well as the process id: two hosts (or PID namespaces) writing one shared
+    // folder cannot pick the same name, and O_EXCL refuses a clash rather than sharing a file.
+    static thread_local std::mt19937_64 random{std::random_device{}()};
+    char unique[17];
+    std::snprintf(unique, sizeof unique, "%016llx", static_cast<unsigned long long>(random()));
     // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "." + std::string.
-    const std::string suffix = ".tmp" + std::to_string(::getpid()) + path.extension().string();
+    std::string suffix(kTemporaryMarker);
+    suffix += host_tag();
+    suffix += '@';
+    suffix += std::to_string(::getpid());
+    suffix += '@';
+    suffix += unique;
+    suffix += path.extension().string();
     std::string name = ".";
     name += path.filename().string();
     if (name.size() + suffix.size() > kNameMax) {

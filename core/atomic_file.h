@@ -11,9 +11,9 @@
 namespace kdray {
 
 /// The temporary name for `path`: hidden, in the same folder (so the rename is atomic on one file
-/// system), unique per process, and ending in the real extension so that a writer choosing the
-/// format by extension (OpenImageIO) picks the right one: dir/frame.png ->
-/// dir/.frame.png.tmp123.png.
+/// system), marked as kdray's with the host, the process id and 64 random bits, and ending in the
+/// real extension so that a writer choosing the format by extension (OpenImageIO) picks the right
+/// one: dir/frame.png -> dir/.frame.png.kdray.tmp@node7@123@0f3a...9c.png.
 std::filesystem::path temporary_path(const std::filesystem::path& path);
 
 /// Calls `write` with the temporary name of `path`; `write` creates and fills that file and
@@ -43,7 +43,8 @@ struct FileContent {
 void write_files_atomically(const std::vector<FileContent>& files);
 
 /// Removes the temporary files that a kdray process killed mid-write (SIGKILL, a power cut) left
-/// in `dir`: hidden files named by temporary_path whose process no longer runs.
+/// in `dir`: regular files named as temporary_path names them, made on this host, whose process
+/// no longer runs. Nothing else: not a user's `.notes.tmp123`, not another host's temporaries.
 void remove_stale_temporaries(const std::filesystem::path& dir);
 
 }  // namespace kdray

@@ -8,6 +8,8 @@
 #include <cerrno>
 #include <cstring>
 
+#include <nlohmann/json.hpp>
+
 #include "core/error.h"
 #include "core/frame_memory.h"
 
@@ -87,6 +89,32 @@ std::string read_input_file(const std::filesystem::path& path, std::string_view 
     }
     text.resize(done);
     return text;
+}
+
+nlohmann::json parse_json(std::string_view text, const std::string& name) {
+    using nlohmann::json;
+    // The callback sees each array or object start with the depth of its parent: refusing there
+    // stops the parse before the deep value exists.
+    const json::parser_callback_t bound_depth = [&](int depth, json::parse_event_t event, json&) {
+        const bool opens =
+            event == json::parse_event_t::object_start || event == json::parse_event_t::array_start;
+        if (opens && depth >= kMaxJsonDepth)
+            throw Error(name + ": JSON nested more than " + std::to_string(kMaxJsonDepth) +
+                        " levels deep; kdray's files nest a few levels");
+        return true;
+    };
+    try {
+        return json::parse(text.begin(), text.end(), bound_depth);
+    } catch (const json::parse_error& e) {
+        // nlohmann's message begins with "[json.exception.parse_error.101] "; drop the tag.
+        std::string what = e.what();
+        if (const auto pos = what.find("] "); what.starts_with("[json") && pos != what.npos)
+            what = what.substr(pos + 2);
+        throw Error(name + ": invalid JSON at byte " + std::to_string(e.byte) + ": " + what);
+    } catch (const json::exception& e) {
+        // Not a syntax error but a value JSON cannot hold here, e.g. a number overflow.
+        throw Error(name + ": invalid JSON: " + e.what());
+    }
 }
 
 }  // namespace kdray

@@ -1,13 +1,15 @@
 // input_file.h — how kdray reads every file a user names as input (OBJ and MTL files, render
-// files, tree files): only a regular file is read, its size is checked before the read, and
-// nothing can block (a FIFO) or grow without bound (/dev/zero, a link to it). Errors name the
-// file and the problem.
+// files, tree files, stats.json): only a regular file is read, its size is checked before the
+// read, nothing can block (a FIFO) or grow without bound (/dev/zero, a link to it), and JSON is
+// parsed to a bounded depth. Errors name the file and the problem.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
+
+#include <nlohmann/json_fwd.hpp>
 
 namespace kdray {
 
@@ -26,5 +28,15 @@ std::uint64_t input_size_limit();
 /// bytes kdray reads of one WHAT here" when it exceeds max_bytes.
 std::string read_input_file(const std::filesystem::path& path, std::string_view what,
                             std::uint64_t max_bytes = input_size_limit());
+
+/// The deepest nesting of arrays and objects kdray parses: kdray's own files nest 5 deep, and
+/// every consumer of a parsed value (dump(), destruction, a message quoting it) recurses once a
+/// level, so that 100,000 nested `[` in a 200 KB file overflowed the stack.
+inline constexpr int kMaxJsonDepth = 64;
+
+/// `text` parsed as JSON. Throws Error "NAME: invalid JSON at byte N: WHAT" on a syntax error,
+/// "NAME: invalid JSON: WHAT" on a value JSON cannot hold, and "NAME: JSON nested more than 64
+/// levels deep" past kMaxJsonDepth, before anything deeper is built.
+nlohmann::json parse_json(std::string_view text, const std::string& name);
 
 }  // namespace kdray

@@ -27,12 +27,14 @@
 #define KDRAY_EXP2 exp2
 #define KDRAY_LOG2 log2
 #define KDRAY_FLOOR floor
+#define KDRAY_ISFINITE isfinite
 #else
 #define KDRAY_EFFECT_ON(view, bit) (((view)->effects & (bit)) != 0u)
 #define KDRAY_SQRT std::sqrt
 #define KDRAY_EXP2 std::exp2
 #define KDRAY_LOG2 std::log2
 #define KDRAY_FLOOR std::floor
+#define KDRAY_ISFINITE std::isfinite
 #endif
 
 #define KDRAY_PI 3.14159265358979323846f

@@ -9,22 +9,28 @@
 #ifndef KDRAY_KD_TEXTURE_H
 #define KDRAY_KD_TEXTURE_H
 
-/* The hit's texture coordinates into uv; 0 where its triangle has none. */
+/* The hit's texture coordinates into uv; 0 where its triangle has none or they are not finite. */
 KDRAY_INLINE int kd_hit_texcoord(const KdSceneView* scene, KdHit hit, kd_f32* uv) {
     KDRAY_GLOBAL const kd_f32* t = scene->texcoords + (size_t)hit.prim * 6u;
     if (!(t[0] == t[0])) return 0;
     const kd_f32 w = 1.0f - hit.u - hit.v;
     uv[0] = w * t[0] + hit.u * t[2] + hit.v * t[4];
     uv[1] = w * t[1] + hit.u * t[3] + hit.v * t[5];
-    return 1;
+    /* The corners are finite (the OBJ pre-scan), but corners near FLT_MAX overflow when
+     * interpolated: such a hit is untextured rather than a NaN that indexes outside a texture. */
+    return KDRAY_ISFINITE(uv[0]) && KDRAY_ISFINITE(uv[1]);
 }
 
-/* Texel (x, y) of texture `tex`, wrapped, times `weight`, added to out. */
+/* Texel (x, y) of texture `tex`, wrapped, times `weight`, added to out. The lookup passes x in
+ * [-1, width] and y in [-1, height]; the remainder wraps any other value into the texture too, so
+ * that no coordinate ever reads outside it. */
 KDRAY_INLINE void kd_add_texel(const KdSceneView* scene, KDRAY_GLOBAL const KdTexture* tex,
                                kd_i32 x, kd_i32 y, kd_f32 weight, kd_f32* out) {
     const kd_i32 w = (kd_i32)tex->width, h = (kd_i32)tex->height;
-    x = x < 0 ? x + w : (x >= w ? x - w : x);
-    y = y < 0 ? y + h : (y >= h ? y - h : y);
+    x %= w;
+    y %= h;
+    x = x < 0 ? x + w : x;
+    y = y < 0 ? y + h : y;
     KDRAY_GLOBAL const kd_f32* texel =
         scene->texels + 4u * ((size_t)tex->offset + (size_t)y * (size_t)w + (size_t)x);
     for (int c = 0; c < 3; ++c) out[c] += weight * texel[c];
@@ -34,7 +40,11 @@ KDRAY_INLINE void kd_add_texel(const KdSceneView* scene, KDRAY_GLOBAL const KdTe
 KDRAY_INLINE void kd_texture_lookup(const KdSceneView* scene, kd_u32 id, const kd_f32* uv,
                                     kd_f32* rgb) {
     KDRAY_GLOBAL const KdTexture* tex = scene->textures + id;
-    const kd_f32 u = uv[0] - KDRAY_FLOOR(uv[0]), v = uv[1] - KDRAY_FLOOR(uv[1]);
+    /* Only finite coordinates wrap into [0, 1]: the float-to-int conversions below are undefined
+     * for NaN or inf (INT_MIN on x86), so any other reads texel (0, 0)'s corner. */
+    const int finite = KDRAY_ISFINITE(uv[0]) && KDRAY_ISFINITE(uv[1]);
+    const kd_f32 u = finite ? uv[0] - KDRAY_FLOOR(uv[0]) : 0.0f;
+    const kd_f32 v = finite ? uv[1] - KDRAY_FLOOR(uv[1]) : 0.0f;
     /* Texel centres at (i + 0.5) / width; row 0 is the top of the image, v = 1. */
     const kd_f32 x = u * (kd_f32)tex->width - 0.5f, y = (1.0f - v) * (kd_f32)tex->height - 0.5f;
     const kd_f32 x0 = KDRAY_FLOOR(x), y0 = KDRAY_FLOOR(y);

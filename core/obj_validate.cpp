@@ -161,7 +161,7 @@ class ObjScanner {
         if (keyword == "v") return scan_vertex(p, e);
         if (keyword == "f") return scan_face(p, e);
         if (keyword == "vt") {
-            result_.texcoords += blank_follows;
+            if (blank_follows) scan_texcoord(p, e);
             return;
         }
         if (keyword == "vn") {
@@ -199,6 +199,19 @@ class ObjScanner {
         ++result_.normals;
     }
 
+    /// A texture coordinate: `vt u [v [w]]`, each finite as a float. tinyobjloader would read
+    /// `1e39` as inf and `0e725` as NaN, and a texture lookup turns a non-finite u into an index
+    /// far outside its texture.
+    void scan_texcoord(const char* p, const char* e) {
+        int count = 0;
+        for (std::string_view token; !(token = next_token(p, e)).empty(); ++count)
+            check_number(token, "texture coordinate");
+        if (count < 1 || count > 3)
+            fail("texture coordinate has " + std::to_string(count) +
+                 " numbers; expected 'vt u', 'vt u v' or 'vt u v w'");
+        ++result_.texcoords;
+    }
+
     /// `vw vertex joint weight joint weight ...`, tinyobjloader's skinning extension, which kdray
     /// ignores but tinyobjloader parses: it converts each joint id to int, so a joint of 1e127
     /// (inf as its float) is undefined behaviour there (UBSan stopped fuzz_obj on it). Joints must
@@ -222,8 +235,8 @@ class ObjScanner {
         if (count % 2 != 0) fail("vertex weight line has a joint without a weight");
     }
 
-    /// A number of a `v` or `vn` line (`what` names it in the error): finite as a 32-bit float,
-    /// as tinyobjloader reads it; its value in `value` when given.
+    /// A number of a `v`, `vt` or `vn` line (`what` names it in the error): finite as a 32-bit
+    /// float, as tinyobjloader reads it; its value in `value` when given.
     void check_number(std::string_view token, const char* what, double* value = nullptr) const {
         if (const char* problem = obj_number_problem(token, value))
             fail(std::string(what) + " '" + printable(token) + "' " + problem);

@@ -36,6 +36,7 @@ struct ObjPrescan {
 };
 
 /// Checks an OBJ file's text: every `v` line has 3, 4 or 6 finite numbers that fit a float, every
+/// `vt` line 1 to 3 and every `vn` line 3 of them, every
 /// face has at least 3 vertices whose v/vt/vn indices name existing attributes (a positive index
 /// at most the file's count, a negative one at most the count defined before its line, never 0),
 /// statements are known OBJ keywords and the text holds no control bytes. `name` is the file name

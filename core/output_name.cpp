@@ -41,8 +41,8 @@ std::string expand(const std::string& pattern, const std::string& stem, std::siz
         i = close;
     }
     if (name.empty()) throw bad("the name is empty");
-    // A hidden name would read as one of kdray's temporaries (.NAME.tmpPID), which a later run
-    // into the folder removes.
+    // A hidden name would read as one of kdray's temporaries (.NAME.kdray.tmp@HOST@PID@RANDOM),
+    // which a later run into the folder removes.
     if (name[0] == '.') throw bad("a name cannot start with '.'");
     return name;
 }

@@ -126,19 +126,7 @@ class RenderFileParser {
     explicit RenderFileParser(std::string file) : file_(std::move(file)) {}
 
     RenderSettings parse(const std::string& text) {
-        json root;
-        try {
-            root = json::parse(text);
-        } catch (const json::parse_error& e) {
-            // nlohmann's message begins with "[json.exception.parse_error.101] "; drop the tag.
-            std::string what = e.what();
-            if (const auto pos = what.find("] "); what.starts_with("[json") && pos != what.npos)
-                what = what.substr(pos + 2);
-            throw Error(file_ + ": invalid JSON at byte " + std::to_string(e.byte) + ": " + what);
-        } catch (const json::exception& e) {
-            // Not a syntax error but a value JSON cannot hold here, e.g. a number overflow.
-            throw Error(file_ + ": invalid JSON: " + e.what());
-        }
+        json root = parse_json(text, file_);
         if (!root.is_object()) throw Error(file_ + ": the render file must be a JSON object");
 
         RenderSettings settings;

@@ -38,6 +38,20 @@ std::size_t frame_number(const nlohmann::json& record) {
     return record.value("frame", std::size_t(0));
 }
 
+/// `value` as a message quotes it: its JSON text, cut to 40 bytes (a 30 MB string is one field).
+std::string excerpt(const nlohmann::json& value) {
+    std::string text = value.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace);
+    if (text.size() > 40) text = text.substr(0, 40) + "...";
+    return text;
+}
+
+/// The names a frame's record (or failure) is matched by across runs: strings where present.
+void check_names(const nlohmann::json& record, const std::string& where) {
+    for (const char* key : {"input", "image"})
+        if (record.contains(key) && !record[key].is_string())
+            throw Error(where + "." + key + " is " + excerpt(record[key]) + ", not a file name");
+}
+
 /// What a record is of: its image's file name (a record per image in the folder), or, for a
 /// failure recorded before failures named their image, its frame and input.
 std::string record_key(const nlohmann::json& record) {
@@ -54,41 +68,50 @@ bool record_before(const nlohmann::json& a, const nlohmann::json& b) {
 }  // namespace
 
 nlohmann::json read_render_stats(const std::filesystem::path& file) {
-    nlohmann::json stats;
-    try {
-        stats = nlohmann::json::parse(read_input_file(file, "stats.json file"));
-    } catch (const nlohmann::json::exception& e) {
-        throw Error(file.string() + ": malformed JSON: " + e.what());
-    }
+    const nlohmann::json stats =
+        parse_json(read_input_file(file, "stats.json file"), file.string());
     if (!stats.is_object() || !stats.contains("summary") || !stats.contains("frames") ||
         !stats["frames"].is_array())
         throw Error(file.string() + ": not a kdray stats file (no summary or frames)");
-    // What the summary reads must be what kdray writes: a frame number that is a count, times
-    // that are numbers.
+    // Every field kdray reads back must be what kdray writes: a frame number that is a count,
+    // times that are numbers, names that are strings; checked here, before a run renders
+    // anything into the folder, and named with the file and the field.
+    for (const char* key : {"builder", "tracer"})
+        if (stats.contains(key) && !stats[key].is_string())
+            throw Error(file.string() + ": " + key + " is " + excerpt(stats[key]) +
+                        ", not a string");
     for (std::size_t k = 0; k < stats["frames"].size(); ++k) {
         const nlohmann::json& frame = stats["frames"][k];
         const std::string where = file.string() + ": frames[" + std::to_string(k) + "]";
         if (!frame.is_object()) throw Error(where + " is not an object");
         if (frame.contains("frame") && !frame["frame"].is_number_unsigned())
-            throw Error(where + ".frame is " + frame["frame"].dump() + ", not a frame number");
+            throw Error(where + ".frame is " + excerpt(frame["frame"]) + ", not a frame number");
         for (const char* key : {"frame_ms", "load_ms", "load_wait_ms", "compile_ms", "build_ms",
                                 "trace_ms", "write_ms", "other_ms"})
             if (frame.contains(key) && !frame[key].is_number())
-                throw Error(where + "." + key + " is " + frame[key].dump() + ", not a number");
+                throw Error(where + "." + key + " is " + excerpt(frame[key]) + ", not a number");
         if (frame.contains("run") && !frame["run"].is_number_unsigned())
-            throw Error(where + ".run is " + frame["run"].dump() + ", not a run index");
+            throw Error(where + ".run is " + excerpt(frame["run"]) + ", not a run index");
+        check_names(frame, where);
     }
-    if (stats.contains("runs") && !stats["runs"].is_array())
-        throw Error(file.string() + ": runs is not a list");
+    if (stats.contains("runs")) {
+        if (!stats["runs"].is_array()) throw Error(file.string() + ": runs is not a list");
+        for (std::size_t k = 0; k < stats["runs"].size(); ++k)
+            if (!stats["runs"][k].is_object())
+                throw Error(file.string() + ": runs[" + std::to_string(k) +
+                            "] is not an object (a run's settings)");
+    }
     if (stats.contains("failed_frames")) {
         if (!stats["failed_frames"].is_array())
             throw Error(file.string() + ": failed_frames is not a list");
         for (std::size_t k = 0; k < stats["failed_frames"].size(); ++k) {
             const nlohmann::json& failure = stats["failed_frames"][k];
+            const std::string where = file.string() + ": failed_frames[" + std::to_string(k) + "]";
             if (!failure.is_object() || !failure.contains("frame") ||
                 !failure["frame"].is_number_unsigned())
-                throw Error(file.string() + ": failed_frames[" + std::to_string(k) +
-                            "] is not a failed frame's record (an object with its frame number)");
+                throw Error(where +
+                            " is not a failed frame's record (an object with its frame number)");
+            check_names(failure, where);
         }
     }
     return stats;
@@ -101,6 +124,12 @@ nlohmann::json read_folder_stats(const std::filesystem::path& dir) {
     if (!std::filesystem::exists(status)) return nullptr;
     if (std::filesystem::is_directory(status))
         throw Error(file.string() + ": exists and is a directory, where the run writes its stats");
+    // The merged file replaces the link, not what it names: refused before the run renders, not
+    // after.
+    if (std::filesystem::is_symlink(status))
+        throw Error(file.string() +
+                    ": is a symbolic link, where the run writes its stats; move it away, or "
+                    "render into another folder");
     try {
         return read_render_stats(file);
     } catch (const Error& e) {

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "core/atomic_file.h"
 #include "core/image_codec.h"
 #include "core/kd_shared.h"
 #include "core/tree_file.h"
@@ -411,14 +412,17 @@ TEST_CASE("a stem at the file name limit renders; temporaries of a killed run ar
     CHECK(fs::exists(out / (stem + ".aov.exr")));
 
     // A temporary whose writer no longer runs goes; one of a live process (this test) stays.
-    const int dead = 2147483600;  // above any pid_max
-    write_text_file(out / (".frame.png.tmp" + std::to_string(dead) + ".png"), "half");
-    const fs::path live = out / (".frame.png.tmp" + std::to_string(::getpid()) + ".png");
+    // temporary_path names them as kdray does on this host, for this process's id.
+    const fs::path live = kdray::temporary_path(out / "frame.png");
+    const std::string pid = "@" + std::to_string(::getpid()) + "@";
+    std::string dead_name = live.filename().string();
+    dead_name.replace(dead_name.find(pid), pid.size(), "@2147483600@");  // above any pid_max
+    write_text_file(out / dead_name, "half");
     write_text_file(live, "in progress");
     write_text_file(out / ".user-notes.tmp", "not ours");
     r = render(obj, out, camera);
     CHECK(r.status == 0);
-    CHECK_FALSE(fs::exists(out / (".frame.png.tmp" + std::to_string(dead) + ".png")));
+    CHECK_FALSE(fs::exists(out / dead_name));
     CHECK(fs::exists(live));
     CHECK(fs::exists(out / ".user-notes.tmp"));
     fs::remove_all(dir);
