@@ -26,6 +26,7 @@ struct OpenClRenderChoice {
     kd_u32 effects = 0, intersect = KDRAY_INTERSECT_WATERTIGHT;
     bool packets = false, shadow_packets = false;
     std::string pixel_kernel;  // kd_render_pixels or kd_shade_traced_pixels
+    bool cost = false;         // kd_trace_costs after the pixels (the cost AOV)
 
     auto operator<=>(const OpenClRenderChoice&) const = default;
 };
@@ -35,7 +36,7 @@ OpenClRenderChoice choose_opencl_render(const ClDevice& device, const RenderInpu
 /// triangle test by cl/runtime/program_cache); packet and shadow only where the choice uses them.
 struct OpenClRenderPlan {
     OpenClRenderChoice choice;
-    cl::Kernel pixel, packet, shadow;
+    cl::Kernel pixel, packet, shadow, cost;
 };
 OpenClRenderPlan plan_opencl_render(ClDevice& device, const OpenClRenderChoice& choice);
 
