@@ -92,7 +92,8 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
         // A frame is its image, its AOV and its heat map: all are encoded before any is put into
         // place, so that a failed one (a full disk, a directory where it goes) fails the frame
         // with the folder as it was, an earlier run's files of the frame included.
-        const std::string image_bytes = encode_image(image_path, result.image, settings_.exposure);
+        const std::string image_bytes =
+            encode_image(image_path, result.image, settings_.exposure, settings_.display);
         const std::string aov_bytes = options_.aov ? encode_aov(aov_path, result.hits) : "";
         std::vector<FileContent> files = {{image_path, image_bytes}};
         if (options_.aov) files.push_back({aov_path, aov_bytes});

@@ -60,15 +60,34 @@ void check_size(const fs::path& path, int width, int height, std::size_t values,
 
 }  // namespace
 
-void write_image(const fs::path& path, const Image& image, float exposure_stops) {
-    write_file_atomically(path, encode_image(path, image, exposure_stops));
+float display_transform(float linear, DisplayTransform transform) {
+    if (!(linear > 0.0f)) return 0.0f;
+    if (transform == DisplayTransform::clamp) return std::min(linear, 1.0f);
+    // Narkowicz, "ACES Filmic Tone Mapping Curve" (2015): a rational fit of the ACES reference
+    // rendering and output transforms, applied per channel, without the fit's 0.6 pre-scale so
+    // that mid grey stays near mid grey (0.18 -> 0.267).
+    // The fit passes 1 at x = 7.24 and stays above it; inf / inf would be NaN.
+    if (linear >= 8.0f) return 1.0f;
+    const double x = linear;
+    const double y = (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14);
+    return float(std::min(y, 1.0));
+}
+
+const char* display_name(DisplayTransform transform) {
+    return transform == DisplayTransform::filmic ? "filmic" : "clamp";
+}
+
+void write_image(const fs::path& path, const Image& image, float exposure_stops,
+                 DisplayTransform display) {
+    write_file_atomically(path, encode_image(path, image, exposure_stops, display));
 }
 
 void write_aov(const fs::path& path, const HitBuffer& hits) {
     write_file_atomically(path, encode_aov(path, hits));
 }
 
-std::string encode_image(const fs::path& path, const Image& image, float exposure_stops) {
+std::string encode_image(const fs::path& path, const Image& image, float exposure_stops,
+                         DisplayTransform display) {
     check_size(path, image.width, image.height, image.rgb.size(), 3, "image");
     const std::string ext = lower_extension(path);
     // conventions.md: every radiance that reaches an image is multiplied by 2^exposure.
@@ -76,7 +95,8 @@ std::string encode_image(const fs::path& path, const Image& image, float exposur
     if (ext == ".png") {
         std::vector<std::uint8_t> pixels(image.rgb.size());
         for (std::size_t i = 0; i < pixels.size(); ++i)
-            pixels[i] = std::uint8_t(std::lround(srgb_encode(scale * image.rgb[i]) * 255.0f));
+            pixels[i] = std::uint8_t(std::lround(
+                srgb_encode(display_transform(scale * image.rgb[i], display)) * 255.0f));
         return encoded(path, [&] { return encode_png_rgb8(image.width, image.height, pixels); });
     }
     if (ext == ".exr") {

@@ -29,16 +29,29 @@ struct HitBuffer {
     std::vector<KdTraceCost> costs;
 };
 
+/// How an 8-bit image maps radiance (after exposure) to [0, 1] before the sRGB encoding: the
+/// render file's "display" (conventions.md). EXR images are never transformed.
+///   clamp   min(x, 1): exact below 1, everything brighter white
+///   filmic  the ACES filmic curve as fitted by Narkowicz (2015), per channel: a toe, mid grey
+///           0.18 -> 0.267, 1 -> 0.80, and a shoulder that reaches white only at about 7.2, so
+///           that highlights keep their gradations instead of clipping
+enum class DisplayTransform { clamp, filmic };
+/// The transform of one linear value; NaN and negative values give 0.
+float display_transform(float linear, DisplayTransform transform);
+/// "clamp" or "filmic", as the render file and stats.json spell them.
+const char* display_name(DisplayTransform transform);
+
 /// Writes PNG (sRGB-encoded, 8 bit) or EXR (linear float) by the file's extension, the radiance
-/// multiplied by 2^exposure_stops (conventions.md: PNG clamp(2^e x radiance, 0, 1), EXR 2^e x
+/// multiplied by 2^exposure_stops (conventions.md: PNG display(2^e x radiance), EXR 2^e x
 /// radiance).
-void write_image(const std::filesystem::path& path, const Image& image,
-                 float exposure_stops = 0.0f);
+void write_image(const std::filesystem::path& path, const Image& image, float exposure_stops = 0.0f,
+                 DisplayTransform display = DisplayTransform::clamp);
 void write_aov(const std::filesystem::path& path, const HitBuffer& hits);
 /// The bytes write_image and write_aov would write to `path` (its extension picks the format),
 /// for a caller that writes several files as one (write_files_atomically).
 std::string encode_image(const std::filesystem::path& path, const Image& image,
-                         float exposure_stops = 0.0f);
+                         float exposure_stops = 0.0f,
+                         DisplayTransform display = DisplayTransform::clamp);
 std::string encode_aov(const std::filesystem::path& path, const HitBuffer& hits);
 HitBuffer read_aov(const std::filesystem::path& path);
 

@@ -190,6 +190,8 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
         {"render_file", settings_.render_file},
         {"image", {{"width", render.width}, {"height", render.height}, {"spp", render.spp}}},
         {"max_depth", render.max_depth},
+        // The 8-bit images' transform (EXR images are linear whatever it is).
+        {"display", display_name(render.display)},
         {"overrides", settings_.overrides},
         {"intersect", intersect_name(settings_.frame.intersect)},
         // Each frame's "packets": what ran.
