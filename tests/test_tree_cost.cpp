@@ -259,3 +259,37 @@ TEST_CASE("heat map: viridis at its published end points and middle; the map's s
     CHECK(near(pixel(100), 0x44, 0x01, 0x54));
     std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("cli: --aov and --heatmap write the cost; build --json has the leaf histograms") {
+    const std::filesystem::path dir = test::fresh_temp_dir("cost_cli");
+    const std::filesystem::path obj =
+        test::write_text_file(dir / "one.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const std::filesystem::path render =
+        test::write_text_file(dir / "render.json",
+                              R"({"image": {"width": 16, "height": 12},
+            "camera": {"position": [0.3, 0.3, 2], "look_at": [0.3, 0.3, 0], "fov_y": 60}})");
+    const test::CommandResult r = test::run_kdray(
+        {"render", obj.string(), "-o", (dir / "out").string(), "--camera", render.string(), "--aov",
+         "--heatmap", "--builder", "reference", "--tracer", "reference", "--quiet"});
+    REQUIRE_MESSAGE(r.status == 0, r.err);
+    CHECK(std::filesystem::is_regular_file(dir / "out/one.cost.png"));
+    const nlohmann::json stats = test::read_json(dir / "out/stats.json");
+    CHECK(stats["display"] == "filmic");
+    const nlohmann::json& heatmap = stats["frames"][0]["heatmap"];
+    CHECK(heatmap["file"] == "one.cost.png");
+    // One leaf, one triangle: every ray that enters the box costs C_t + C_i (15 + 20).
+    CHECK(heatmap["max_cost"].get<double>() == 35.0);
+    CHECK(heatmap["scale_cost"].get<double>() == 35.0);
+    const HitBuffer aov = read_aov(dir / "out/one.aov.exr");
+    REQUIRE(aov.costs.size() == 16u * 12u);
+    for (std::size_t i = 0; i < aov.costs.size(); ++i)
+        if (aov.hits[i].prim != KDRAY_NO_HIT) CHECK(aov.costs[i].nodes == 1u);
+
+    const test::CommandResult b =
+        test::run_kdray({"build", obj.string(), "--json", "--builder", "reference"});
+    REQUIRE_MESSAGE(b.status == 0, b.err);
+    const nlohmann::json tree = nlohmann::json::parse(b.out);
+    CHECK(tree["leaf_depth_histogram"] == nlohmann::json::parse("[1]"));
+    CHECK(tree["leaf_size_histogram"] == nlohmann::json::parse("[[1, 1]]"));
+    std::filesystem::remove_all(dir);
+}
