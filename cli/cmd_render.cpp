@@ -37,6 +37,7 @@ FrameOptions frame_options(const RenderCommand& command, const OutputName& name)
     options.out_dir = command.output_dir;
     options.format = command.format;
     options.aov = command.aov;
+    options.heatmap = command.heatmap;
     options.intersect =
         command.intersect == "moller" ? KDRAY_INTERSECT_MOLLER : KDRAY_INTERSECT_WATERTIGHT;
     options.packets = command.packets == "on"    ? RenderInputs::Packets::On
@@ -62,6 +63,7 @@ void check_output_names(const std::vector<std::string>& inputs,
         const std::string stem = output_name(inputs[i], i);
         std::vector<std::string> names = {stem + "." + command.format};
         if (command.aov) names.push_back(stem + ".aov.exr");
+        if (command.heatmap) names.push_back(stem + ".cost.png");
         for (const std::string& name : names) {
             const auto [it, fresh] = writer.emplace(lower(name), i);
             if (!fresh)

@@ -44,6 +44,7 @@ struct RenderCommand {
     std::optional<double> exposure;
     std::string size;  // WIDTHxHEIGHT
     bool aov = false;
+    bool heatmap = false;  // <stem>.cost.png: the centre rays' walk cost in false colour
     std::string format = "png";
     std::string name = "{stem}";  // a frame's file names (core/output_name.h)
     bool skip_existing = false;   // render only the frames whose files are missing

@@ -235,7 +235,12 @@ int main(int argc, char** argv) {
     render_app->add_flag("--skip-existing", render.skip_existing,
                          "render only the frames whose image (and AOV) are not in the folder yet; "
                          "stats.json keeps the earlier runs' records of the others");
-    render_app->add_flag("--aov", render.aov, "also write <stem>.aov.exr (Z, prim_id, N)");
+    render_app->add_flag("--aov", render.aov,
+                         "also write <stem>.aov.exr (Z, prim_id, N, cost.nodes, cost.triangles)");
+    render_app->add_flag("--heatmap", render.heatmap,
+                         "also write <stem>.cost.png: each centre ray's kd-tree walk cost "
+                         "(C_t x nodes + C_i x triangles) in false colour (viridis), from 0 "
+                         "to the 99th percentile of the rays that enter the tree");
     render_app->add_option("--format", render.format, "image format")
         ->check(CLI::IsMember({"png", "exr"}))
         ->capture_default_str();

@@ -11,10 +11,11 @@ namespace kdray {
 FrameMemory estimate_frame_memory(std::uint64_t width, std::uint64_t height, bool aov) {
     const std::uint64_t pixels = width * height;
     const std::uint64_t rgb = 3 * sizeof(float), hit = sizeof(KdHit), counts = sizeof(KdRayCounts);
-    const std::uint64_t normals = aov ? 3 * sizeof(float) : 0;
-    // The 8-bit image and its encoding (at most its raw size, a little over), the AOV's five
+    // With the AOV, its normals and the centre rays' walk costs (KdTraceCost).
+    const std::uint64_t normals = aov ? 3 * sizeof(float) + sizeof(KdTraceCost) : 0;
+    // The 8-bit image and its encoding (at most its raw size, a little over), the AOV's seven
     // 32-bit channels and their encoding.
-    const std::uint64_t encoded = 2 * 3 + (aov ? 2 * 5 * 4 : 0);
+    const std::uint64_t encoded = 2 * 3 + (aov ? 2 * 7 * 4 : 0);
     FrameMemory m;
     // Host: the read-back image, hits, per-pixel counts, normals (twice: read back, converted).
     m.host_bytes = pixels * (rgb + hit + counts + 2 * normals + encoded);

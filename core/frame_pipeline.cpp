@@ -65,6 +65,7 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
     builder_.prepare();
     RenderInputs inputs = prepare_render(scene, settings_, camera, kd_u32(job.number));
     inputs.normals = options_.aov;
+    inputs.cost = options_.aov || options_.heatmap;
     inputs.intersect = options_.intersect;
     inputs.packets = options_.packets;
     tracer_.prepare(inputs);
@@ -84,15 +85,22 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
     const std::string stem = options_.name(job.input, job.number);
     const std::filesystem::path image_path = options_.out_dir / (stem + "." + options_.format);
     const std::filesystem::path aov_path = options_.out_dir / (stem + ".aov.exr");
+    const std::filesystem::path heatmap_path = options_.out_dir / (stem + ".cost.png");
+    Heatmap heatmap;
     const auto write_start = FrameClock::now();
     if (output == Output::Write) {
-        // A frame is its image and its AOV: both are written before either is put into place,
-        // so that a failed one (a full disk, a directory where it goes) fails the frame with the
-        // folder as it was, an earlier run's files of the frame included.
-        const std::string image_bytes = encode_image(image_path, result.image, settings_.exposure);
+        // A frame is its image, its AOV and its heat map: all are encoded before any is put into
+        // place, so that a failed one (a full disk, a directory where it goes) fails the frame
+        // with the folder as it was, an earlier run's files of the frame included.
+        const std::string image_bytes =
+            encode_image(image_path, result.image, settings_.exposure, settings_.display);
         const std::string aov_bytes = options_.aov ? encode_aov(aov_path, result.hits) : "";
         std::vector<FileContent> files = {{image_path, image_bytes}};
         if (options_.aov) files.push_back({aov_path, aov_bytes});
+        if (options_.heatmap) {
+            heatmap = encode_heatmap(heatmap_path, result.hits, built.tree.params.costs);
+            files.push_back({heatmap_path, heatmap.png});
+        }
         write_files_atomically(files);
     }
     const double write_ms = output == Output::Write ? ms_since(write_start) : 0.0;
@@ -135,6 +143,12 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
         {"hit_pixels", hit_pixels},
         {"mrays_per_s", trace_ms > 0 ? double(rays.total()) / (trace_ms * 1e3) : 0.0}};
     if (options_.aov) frame["aov"] = aov_path.filename().string();
+    if (options_.heatmap && output == Output::Write)
+        frame["heatmap"] = {{"file", heatmap_path.filename().string()},
+                            {"scale_cost", heatmap.scale_cost},
+                            {"max_cost", heatmap.max_cost},
+                            {"cost_traversal", built.tree.params.costs.traversal},
+                            {"cost_intersection", built.tree.params.costs.intersection}};
     return frame;
 }
 

@@ -39,6 +39,7 @@ struct FrameOptions {
     std::string format = "png";  // the image's format and extension: png or exr
     OutputName name;             // a frame's files: NAME.png (or .exr) and NAME.aov.exr
     bool aov = false;            // also <stem>.aov.exr; the hits then carry their normals
+    bool heatmap = false;        // also <stem>.cost.png, the centre rays' walk cost (image.h)
     kd_u32 intersect = KDRAY_INTERSECT_WATERTIGHT;  // KDRAY_INTERSECT_*
     RenderInputs::Packets packets = RenderInputs::Packets::Auto;
     /// The process's milliseconds of compilation so far (the OpenCL program cache's

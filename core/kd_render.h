@@ -66,12 +66,12 @@ typedef struct KdSceneView {
 /* Nearest hit, and occlusion, in the scene with its triangle test. */
 KDRAY_HOT_INLINE void kd_scene_closest(const KdSceneView* scene, const KdRay* ray, KdHit* hit) {
     kd_trace(scene->nodes, scene->leaf_indices, scene->triangles, scene->bounds, ray, 0,
-             scene->intersect, hit);
+             scene->intersect, hit, 0);
 }
 KDRAY_HOT_INLINE int kd_scene_occluded(const KdSceneView* scene, const KdRay* ray) {
     KdHit hit;
     kd_trace(scene->nodes, scene->leaf_indices, scene->triangles, scene->bounds, ray, 1,
-             scene->intersect, &hit);
+             scene->intersect, &hit, 0);
     return hit.prim != KDRAY_NO_HIT;
 }
 
@@ -543,6 +543,21 @@ KDRAY_HOT_INLINE void kd_primary_ray(const KdView* view, kd_u32 x, kd_u32 y, kd_
     }
     const kd_u32 h = kd_hash(KDRAY_SAMPLE_KEY(view, x, y, r));
     kd_camera_ray(view, (kd_f32)x + kd_unit_float(h), (kd_f32)y + kd_unit_float(kd_hash(h)), ray);
+}
+
+/* The `cost` AOV of pixel (x, y): the nodes visited and triangles tested by the walk of its
+ * centre ray (kd_trace with the scene's triangle test), the very walk that finds the AOV's hit.
+ * A pass of its own, run only for frames that write the cost, so that the walks that shade
+ * carry no counters (their kd_trace gets a literal 0 and the counting compiles away) and packet
+ * walks need no counting of their own. */
+KDRAY_INLINE void kd_pixel_cost(const KdSceneView* scene, const KdView* view, kd_u32 x, kd_u32 y,
+                                KdTraceCost* cost) {
+    KdRay centre;
+    kd_primary_ray(view, x, y, view->spp, &centre);
+    KdHit hit;
+    cost->nodes = cost->triangles = 0u;
+    kd_trace(scene->nodes, scene->leaf_indices, scene->triangles, scene->bounds, &centre, 0,
+             scene->intersect, &hit, cost);
 }
 
 /* One pixel: spp samples, their mean colour, and the centre ray's hit for the AOV. `traced`,

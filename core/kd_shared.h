@@ -280,6 +280,14 @@ typedef struct KdRayCounts {
     kd_u32 area_shadow;
 } KdRayCounts;
 
+/* KdTraceCost — 8 bytes: the work of kd-tree walks (kd_trace), the `cost` AOV of one centre ray:
+ * nodes: tree nodes visited (inner and leaf; a ray that misses the root box visits none);
+ * triangles: ray-triangle tests run (a triangle in several leaves counts once per leaf). */
+typedef struct KdTraceCost {
+    kd_u32 nodes;
+    kd_u32 triangles;
+} KdTraceCost;
+
 /* ---- The render kernels' by-value arguments. ----
  *
  * The render kernels (cl/render/kernels/render.cl) take the tree's three buffers (nodes,
@@ -344,6 +352,7 @@ static_assert(sizeof(KdTexture) == 16, "KdTexture is 16 bytes on every device");
 static_assert(sizeof(KdLight) == 32, "KdLight is 32 bytes on every device");
 static_assert(sizeof(KdView) == 112, "KdView is 112 bytes on every device");
 static_assert(sizeof(KdRayCounts) == 20, "KdRayCounts is 20 bytes on every device");
+static_assert(sizeof(KdTraceCost) == 8, "KdTraceCost is 8 bytes on every device");
 static_assert(sizeof(KdEmitter) == 16, "KdEmitter is 16 bytes on every device");
 static_assert(sizeof(KdSceneLayout) == 48, "KdSceneLayout is 48 bytes on every device");
 static_assert(sizeof(KdRenderLaunch) == 160, "KdRenderLaunch is 160 bytes on every device");

@@ -347,11 +347,14 @@ typedef struct KdTraversalEntry {
  * hi.xyz. The stack has KDRAY_MAX_DEPTH entries: one push per inner node on the current path, and
  * builders never make a path deeper than that. Hits are accepted wherever they lie on the ray (a
  * triangle in a leaf may extend beyond it); the walk ends when the best hit is nearer than the next
- * node's entry. */
+ * node's entry. `cost`, when not 0, is added the nodes this walk visits and the triangles it tests
+ * (the `cost` AOV); every caller but the cost pass passes a literal 0, and since the walk is
+ * always inlined the counting then compiles away (see kd_pixel_cost for the measurement). */
 KDRAY_HOT_INLINE void kd_trace(KDRAY_GLOBAL const KdNode* nodes,
                                KDRAY_GLOBAL const kd_u32* leaf_indices,
                                KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
-                               const KdRay* ray, int any_hit, kd_u32 intersect, KdHit* hit) {
+                               const KdRay* ray, int any_hit, kd_u32 intersect, KdHit* hit,
+                               KdTraceCost* cost) {
     hit->t = ray->tmax;
     hit->prim = KDRAY_NO_HIT;
     hit->u = 0.0f;
@@ -371,6 +374,7 @@ KDRAY_HOT_INLINE void kd_trace(KDRAY_GLOBAL const KdNode* nodes,
         /* Stop when the best hit lies before this node. */
         if (hit->t < tmin) break;
         KdNode node = nodes[node_index];
+        if (cost) cost->nodes += 1u;
         if (!kd_node_is_leaf(node)) {
             /* Inner node: visit the child on the origin's side first, the other if the ray
              * crosses the plane within [tmin, tmax]. */
@@ -410,6 +414,7 @@ KDRAY_HOT_INLINE void kd_trace(KDRAY_GLOBAL const KdNode* nodes,
         /* Leaf: test its triangles, then resume from the stack. */
         const kd_u32 count = kd_leaf_count(node), offset = kd_leaf_offset(node);
         for (kd_u32 i = 0; i < count; ++i) {
+            if (cost) cost->triangles += 1u;
             const kd_u32 id = leaf_indices[offset + i];
             KDRAY_GLOBAL const kd_f32* tri = triangles + (size_t)id * KDRAY_FLOATS_PER_TRIANGLE;
             const int new_best = KDRAY_USE_MOLLER(intersect)
@@ -430,7 +435,7 @@ KDRAY_HOT_INLINE void kd_trace_closest(KDRAY_GLOBAL const KdNode* nodes,
                                        KDRAY_GLOBAL const kd_u32* leaf_indices,
                                        KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
                                        const KdRay* ray, KdHit* hit) {
-    kd_trace(nodes, leaf_indices, triangles, bounds, ray, 0, KDRAY_INTERSECT_WATERTIGHT, hit);
+    kd_trace(nodes, leaf_indices, triangles, bounds, ray, 0, KDRAY_INTERSECT_WATERTIGHT, hit, 0);
 }
 
 /* 1 when anything blocks the ray within [tmin, tmax). Both helpers use the watertight test. */
@@ -439,7 +444,7 @@ KDRAY_HOT_INLINE int kd_trace_occluded(KDRAY_GLOBAL const KdNode* nodes,
                                        KDRAY_GLOBAL const kd_f32* triangles, const kd_f32* bounds,
                                        const KdRay* ray) {
     KdHit hit;
-    kd_trace(nodes, leaf_indices, triangles, bounds, ray, 1, KDRAY_INTERSECT_WATERTIGHT, &hit);
+    kd_trace(nodes, leaf_indices, triangles, bounds, ray, 1, KDRAY_INTERSECT_WATERTIGHT, &hit, 0);
     return hit.prim != KDRAY_NO_HIT;
 }
 

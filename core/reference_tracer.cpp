@@ -136,6 +136,7 @@ FrameResult render_reference(const KdTree& tree, const Scene& scene, const Rende
     const std::size_t pixels = std::size_t(view.width) * std::size_t(view.height);
     frame.hits.hits.resize(pixels);
     if (inputs.normals) frame.hits.normals.resize(pixels);
+    if (inputs.cost) frame.hits.costs.resize(pixels);
     frame.image.rgb.resize(3 * pixels);
     std::vector<KdRayCounts> counts(pixels);
 
@@ -148,6 +149,7 @@ FrameResult render_reference(const KdTree& tree, const Scene& scene, const Rende
                     frame.hits.hits[i] = KdHit{INFINITY, KDRAY_NO_HIT, 0.0f, 0.0f};
                     for (int c = 0; c < 3; ++c) frame.image.rgb[3 * i + c] = view.background[c];
                     counts[i].primary = view.spp;
+                    if (inputs.cost) frame.hits.costs[i] = KdTraceCost{0, 0};
                     continue;
                 }
                 KdPixel p;
@@ -156,6 +158,8 @@ FrameResult render_reference(const KdTree& tree, const Scene& scene, const Rende
                 if (inputs.normals) frame.hits.normals[i] = {p.normal[0], p.normal[1], p.normal[2]};
                 for (int c = 0; c < 3; ++c) frame.image.rgb[3 * i + c] = p.rgb[c];
                 counts[i] = p.rays;
+                if (inputs.cost)
+                    kd_pixel_cost(&scene_view, &view, x, kd_u32(y), &frame.hits.costs[i]);
             }
     });
     for (const KdRayCounts& c : counts) frame.rays.add(c);

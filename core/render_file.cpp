@@ -133,7 +133,7 @@ class RenderFileParser {
         // `$schema` lets an editor find docs/render-file.schema.json; kdray only checks its type.
         check_fields(root, "",
                      {"$schema", "image", "camera", "lights", "background", "ambient", "exposure",
-                      "max_depth"});
+                      "display", "max_depth"});
         if (present(root, "$schema") && !root["$schema"].is_string())
             fail("$schema", "must be a string (the path or URL of the render file's JSON Schema)");
         if (present(root, "image")) read_image(root["image"], settings);
@@ -164,6 +164,15 @@ class RenderFileParser {
             settings.exposure = number(root["exposure"], "exposure");
             if (!(std::fabs(settings.exposure) <= kMaxExposureStops))
                 fail("exposure", "must be between -64 and 64 stops");
+        }
+        if (present(root, "display")) {
+            const json& display = root["display"];
+            if (display == "clamp")
+                settings.display = DisplayTransform::clamp;
+            else if (display == "filmic")
+                settings.display = DisplayTransform::filmic;
+            else
+                fail("display", "must be \"clamp\" or \"filmic\"");
         }
         if (present(root, "max_depth"))
             settings.max_depth = integer(root["max_depth"], "max_depth", 1, kMaxDepth);

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/image.h"
 #include "core/math.h"
 #include "core/scene_frame.h"
 
@@ -72,6 +73,13 @@ struct RenderSettings {
     Vec3 ambient{0, 0, 0};
     /// In stops: every radiance that reaches an image is multiplied by 2^exposure.
     float exposure = 0.0f;
+    /// How 8-bit images map radiance to display values ("display"; image.h). Filmic by default:
+    /// renders with emitters or bright lights hold radiances far above 1 (CornellBox-Original's
+    /// lamp: Ke = 17, 12, 4), which a clamp turns into flat white patches and, sampled, combs of
+    /// white and dark pixels along their edges; the filmic shoulder keeps gradations up to about
+    /// 7, at the price of mid tones a little brighter (0.18 -> 0.27, 0.5 -> 0.62) and 1 -> 0.80.
+    /// "clamp" gives the earlier images exactly.
+    DisplayTransform display = DisplayTransform::filmic;
     int max_depth = 4;
 
     /// The camera for a frame number in `scene_frame`: the keys mapped into the frame, then

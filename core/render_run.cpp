@@ -29,8 +29,8 @@ void create_output_dir(const std::filesystem::path& dir) {
 /// A frame larger than the host's memory is refused with the figures, before it starts.
 void check_host_memory(const RenderRunSettings& settings) {
     const RenderSettings& render = settings.render;
-    const FrameMemory frame_memory =
-        estimate_frame_memory(render.width, render.height, settings.frame.aov);
+    const FrameMemory frame_memory = estimate_frame_memory(
+        render.width, render.height, settings.frame.aov || settings.frame.heatmap);
     if (const std::uint64_t physical = physical_memory_bytes();
         physical > 0 && frame_memory.host_bytes > physical / 2)
         throw Error(
@@ -57,6 +57,8 @@ std::vector<std::size_t> frames_done(const std::vector<std::string>& inputs,
         bool present = std::filesystem::is_regular_file(dir / (stem + "." + frame.format), ec);
         if (frame.aov)
             present = present && std::filesystem::is_regular_file(dir / (stem + ".aov.exr"), ec);
+        if (frame.heatmap)
+            present = present && std::filesystem::is_regular_file(dir / (stem + ".cost.png"), ec);
         if (present) done.push_back(i);
     }
     return done;
@@ -189,6 +191,8 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
         {"render_file", settings_.render_file},
         {"image", {{"width", render.width}, {"height", render.height}, {"spp", render.spp}}},
         {"max_depth", render.max_depth},
+        // The 8-bit images' transform (EXR images are linear whatever it is).
+        {"display", display_name(render.display)},
         {"overrides", settings_.overrides},
         {"intersect", intersect_name(settings_.frame.intersect)},
         // Each frame's "packets": what ran.

@@ -61,6 +61,9 @@ struct RenderInputs {
     enum class Packets { Auto, On, Off } packets = Packets::Auto;
     /// Whether the frame's hit buffer carries the centre hits' normals (the AOV's N channels).
     bool normals = true;
+    /// Whether it carries each centre ray's walk (kd_pixel_cost: the AOV's cost channels and the
+    /// heat map), traced in a pass of its own.
+    bool cost = false;
 };
 RenderInputs prepare_render(const Scene& scene, const RenderSettings& settings,
                             const Camera& camera, kd_u32 seed);

@@ -40,6 +40,9 @@ struct StatsWalker {
         if (kd_node_is_leaf(node)) {
             const kd_u32 count = kd_leaf_count(node);
             ++stats.leaves;
+            if (stats.leaf_depths.size() <= std::size_t(depth)) stats.leaf_depths.resize(depth + 1);
+            ++stats.leaf_depths[depth];
+            ++stats.leaf_sizes[count];
             if (count == 0)
                 ++stats.empty_leaves;
             else
@@ -83,6 +86,10 @@ TreeStats compute_tree_stats(const KdTree& tree, std::size_t triangle_count, Sah
 }
 
 nlohmann::json to_json(const TreeStats& stats) {
+    // [[size, leaves], ...] by size: exact counts, as long as the distinct sizes (a dense array
+    // would run to the largest leaf, which a budget leaf can make thousands long).
+    nlohmann::json leaf_sizes = nlohmann::json::array();
+    for (const auto& [size, leaves] : stats.leaf_sizes) leaf_sizes.push_back({size, leaves});
     return nlohmann::json{
         {"triangles", stats.triangles},
         {"nodes", stats.nodes},
@@ -97,6 +104,8 @@ nlohmann::json to_json(const TreeStats& stats) {
         {"sah_cost", stats.sah_cost},
         {"cost_traversal", stats.costs.traversal},
         {"cost_intersection", stats.costs.intersection},
+        {"leaf_depth_histogram", stats.leaf_depths},
+        {"leaf_size_histogram", leaf_sizes},
     };
 }
 

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstddef>
+#include <map>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -20,6 +22,10 @@ struct TreeStats {
     std::size_t bytes = 0;               // nodes + leaf indices
     SahCosts costs;                      // the C_t and C_i the cost was computed with
     double sah_cost = 0;
+    /// leaf_depths[d]: leaves at depth d (the root is at 0), for d = 0 .. max_depth.
+    std::vector<std::size_t> leaf_depths;
+    /// leaf_sizes[n]: leaves holding n triangle references, for every n that occurs.
+    std::map<std::size_t, std::size_t> leaf_sizes;
 };
 
 /// Statistics of `tree` over a scene of `triangle_count` triangles, the SAH cost with `costs`.

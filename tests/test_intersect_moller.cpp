@@ -51,7 +51,7 @@ KdHit trace(const KdTree& tree, const Scene& scene, const KdRay& ray, kd_u32 int
                              tree.bounds.hi.x, tree.bounds.hi.y, tree.bounds.hi.z};
     KdHit hit;
     kd_trace(tree.nodes.data(), tree.leaf_indices.data(), scene.triangles.data(), bounds, &ray, 0,
-             intersect, &hit);
+             intersect, &hit, nullptr);
     return hit;
 }
 

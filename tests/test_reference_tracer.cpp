@@ -417,14 +417,28 @@ TEST_CASE("PNG holds sRGB-encoded 8-bit values; EXR holds the linear floats") {
         CHECK(int(pixels[3 * i]) == expected[i]);
     }
 
-    write_image(dir.path / "frame.exr", image);
+    // The render file's "display": clamp is the bytes above; filmic is sRGB(Narkowicz(x)),
+    // evaluated apart in Python (double); an EXR stays linear under either.
+    CHECK(encode_image(dir.path / "c.png", image, 0.0f, DisplayTransform::clamp) ==
+          encode_image(dir.path / "c.png", image));
+    write_image(dir.path / "filmic.png", image, 0.0f, DisplayTransform::filmic);
+    const std::vector<int> filmic = {0, 1, 3, 141, 206, 232, 245, 0, 59};
+    auto in_filmic = OIIO::ImageInput::open((dir.path / "filmic.png").string());
+    REQUIRE(in_filmic);
+    REQUIRE(in_filmic->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, pixels.data()));
+    for (std::size_t i = 0; i < linear.size(); ++i) {
+        CAPTURE(linear[i]);
+        CHECK(int(pixels[3 * i]) == filmic[i]);
+    }
+
+    write_image(dir.path / "frame.exr", image, 0.0f, DisplayTransform::filmic);
     auto exr = OIIO::ImageInput::open((dir.path / "frame.exr").string());
     REQUIRE(exr);
     std::vector<float> back(27);
     REQUIRE(exr->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, back.data()));
     CHECK(back == image.rgb);
-    // Only the two files: no temporary left behind.
-    CHECK(dir.entries().size() == 2);
+    // Only the three files: no temporary left behind.
+    CHECK(dir.entries().size() == 3);
 }
 
 TEST_CASE("failed writes throw, name the path and leave no file") {

@@ -3,9 +3,11 @@
 // the file and the field's path.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
+#include <utility>
 
 #include "core/error.h"
 #include "core/render_file.h"
@@ -53,6 +55,45 @@ TEST_CASE("ambient is RGB or a grey; exposure is in stops") {
     const RenderSettings grey = parse_render_json(R"({"ambient": 0.25, "exposure": 2})", "r.json");
     CHECK(grey.ambient == Vec3{0.25f, 0.25f, 0.25f});
     CHECK(grey.exposure == 2.0f);
+}
+
+TEST_CASE("display: filmic by default, clamp on request, nothing else") {
+    CHECK(parse_render_json("{}", "r.json").display == DisplayTransform::filmic);
+    CHECK(parse_render_json(R"({"display": "clamp"})", "r.json").display ==
+          DisplayTransform::clamp);
+    CHECK(parse_render_json(R"({"display": "filmic"})", "r.json").display ==
+          DisplayTransform::filmic);
+    CHECK(parse_error(R"({"display": "aces"})") ==
+          "scene/render.json: field 'display' must be \"clamp\" or \"filmic\"");
+    CHECK(parse_error(R"({"display": 1})") ==
+          "scene/render.json: field 'display' must be \"clamp\" or \"filmic\"");
+}
+
+TEST_CASE("display transforms against their closed forms") {
+    // Narkowicz's fit y = x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14), evaluated apart (in
+    // Python, double) at a few points; above about 7.25 it exceeds 1 and is clamped.
+    const std::pair<float, double> filmic[] = {{0.01f, 0.003770279794447903},
+                                               {0.18f, 0.2668989203894968},
+                                               {0.5f, 0.6163069544364508},
+                                               {1.0f, 0.8037974683544302},
+                                               {2.0f, 0.914855072463768},
+                                               {7.0f, 0.9988649262202043},
+                                               {7.3f, 1.0},
+                                               {100.0f, 1.0}};
+    for (const auto& [x, y] : filmic) {
+        CAPTURE(x);
+        CHECK(display_transform(x, DisplayTransform::filmic) == doctest::Approx(y).epsilon(1e-6));
+    }
+    // Clamp is min(x, 1): today's images.
+    for (const float x : {0.0f, 0.001f, 0.25f, 0.999f, 1.0f, 1.5f, 1e30f})
+        CHECK(display_transform(x, DisplayTransform::clamp) == std::min(x, 1.0f));
+    for (const DisplayTransform t : {DisplayTransform::clamp, DisplayTransform::filmic}) {
+        CHECK(display_transform(-1.0f, t) == 0.0f);
+        CHECK(display_transform(NAN, t) == 0.0f);
+        CHECK(display_transform(INFINITY, t) == 1.0f);
+    }
+    CHECK(std::string(display_name(DisplayTransform::clamp)) == "clamp");
+    CHECK(std::string(display_name(DisplayTransform::filmic)) == "filmic");
 }
 
 TEST_CASE("the example of conventions.md reads field by field") {

@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <map>
 #include <random>
 #include <string>
 
@@ -95,6 +96,32 @@ TEST_CASE("SAH cost of the hand-built tree matches its closed form") {
     CHECK(j["sah_cost"].get<double>() == doctest::Approx(s.sah_cost));
     CHECK(j["cost_traversal"].get<double>() == 15.0);
     CHECK(j["cost_intersection"].get<double>() == 20.0);
+}
+
+TEST_CASE("leaf histograms of the hand-built tree and of the reference builder's") {
+    // small_tree's leaves: node 1 (2 triangles, depth 1), nodes 3 (1, depth 2) and 4 (0, depth 2).
+    const TreeStats s = compute_tree_stats(small_tree(), 3, SahCosts{});
+    CHECK(s.leaf_depths == std::vector<std::size_t>{0, 1, 2});
+    CHECK(s.leaf_sizes == std::map<std::size_t, std::size_t>{{0, 1}, {1, 1}, {2, 1}});
+    const nlohmann::json j = to_json(s);
+    CHECK(j["leaf_depth_histogram"] == nlohmann::json::parse("[0, 1, 2]"));
+    CHECK(j["leaf_size_histogram"] == nlohmann::json::parse("[[0, 1], [1, 1], [2, 1]]"));
+
+    // The reference builder on one triangle: nothing to cut (its box is the root box), one leaf.
+    const Scene one = make_scene({0, 0, 0, 1, 0, 0, 0, 1, 1}, "one");
+    const TreeStats single = compute_tree_stats(build_reference(one), 1, SahCosts{});
+    CHECK(single.leaf_depths == std::vector<std::size_t>{1});
+    CHECK(single.leaf_sizes == std::map<std::size_t, std::size_t>{{1, 1}});
+
+    // On a real build the histograms account for every leaf and every reference.
+    const Scene many = test::random_triangles(500, 7);
+    const TreeStats r = compute_tree_stats(build_reference(many), 500, SahCosts{});
+    std::size_t leaves = 0, references = 0;
+    for (const std::size_t n : r.leaf_depths) leaves += n;
+    for (const auto& [size, n] : r.leaf_sizes) references += size * n;
+    CHECK(leaves == r.leaves);
+    CHECK(references == r.triangle_references);
+    CHECK(r.leaf_depths.size() == std::size_t(r.max_depth) + 1);
 }
 
 TEST_CASE("SAH cost of a single-leaf tree is C_i times the triangle count") {

@@ -89,7 +89,7 @@ struct RenderBuffers {
     /// The frame's read-only shading arrays (cl/render/scene_arrays.h) and where each lies.
     cl::Buffer scene_data;
     KdSceneLayout layout{};
-    cl::Buffer rgb, hits, normals, counts, traced, occluded;
+    cl::Buffer rgb, hits, normals, counts, traced, occluded, costs;
 };
 
 /// The image rows of one launch: `count` rows from `first`.
@@ -141,6 +141,16 @@ void launch_shadow_packets(ClDevice& device, cl::Kernel& kernel, const RenderBuf
     enqueue_packet_tiles(device, kernel, launch);
 }
 
+/// kd_trace_costs over the launch's rows, in the pixel kernels' tiles.
+void launch_costs(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
+                  const KdRenderLaunch& launch) {
+    set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, launch, b.costs);
+    device.launch(kernel,
+                  cl::NDRange(round_up(std::max<std::size_t>(1, launch.view.width), kTileWidth),
+                              round_up(launch.rows, kTileHeight)),
+                  cl::NDRange(kTileWidth, kTileHeight));
+}
+
 /// The launch record of a frame's launches, their rows unset.
 KdRenderLaunch frame_launch(const KdView& view, const Aabb& bounds, kd_u32 outputs) {
     KdRenderLaunch launch{};
@@ -161,6 +171,7 @@ void launch_rows(ClDevice& device, OpenClRenderPlan& plan, const RenderBuffers& 
     if (plan.choice.packets) launch_camera_packets(device, plan.packet, b, launch);
     if (plan.choice.shadow_packets) launch_shadow_packets(device, plan.shadow, b, launch);
     launch_pixels(device, plan.pixel, b, launch);
+    if (plan.choice.cost) launch_costs(device, plan.cost, b, launch);
 }
 
 }  // namespace
@@ -195,6 +206,7 @@ OpenClRenderChoice choose_opencl_render(const ClDevice& device, const RenderInpu
     choice.pixel_kernel = choice.packets && inputs.view.spp == 1u && one_ray_tree
                               ? "kd_shade_traced_pixels"
                               : "kd_render_pixels";
+    choice.cost = inputs.cost;
     return choice;
 }
 
@@ -205,6 +217,7 @@ OpenClRenderPlan plan_opencl_render(ClDevice& device, const OpenClRenderChoice& 
     plan.pixel = make_kernel(program, choice.pixel_kernel.c_str());
     if (choice.packets) plan.packet = make_kernel(program, "kd_trace_camera_packets");
     if (choice.shadow_packets) plan.shadow = make_kernel(program, "kd_trace_shadow_packets");
+    if (choice.cost) plan.cost = make_kernel(program, "kd_trace_costs");
     return plan;
 }
 
@@ -218,7 +231,7 @@ void warm_up_opencl_render(ClDevice& device, OpenClRenderPlan& plan) {
         RenderBuffers buffers;
         buffers.nodes = buffers.leaf_indices = buffers.triangles = buffers.scene_data = dummy;
         buffers.rgb = buffers.hits = buffers.normals = buffers.counts = dummy;
-        buffers.traced = buffers.occluded = dummy;
+        buffers.traced = buffers.occluded = buffers.costs = dummy;
         launch_rows(device, plan, buffers, KdRenderLaunch{}, {0, 1});
     });
     device.finish("preparing the render kernel on " + device.info().name);
@@ -255,6 +268,8 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
     b.hits = device.allocate(pixels * sizeof(KdHit), "hit buffer");
     b.normals = device.allocate(inputs.normals ? pixels * 3 * sizeof(float) : 1, "normal buffer");
     b.counts = device.allocate(count_rays ? pixels * sizeof(KdRayCounts) : 1, "ray counts");
+    b.costs =
+        device.allocate(inputs.cost ? pixels * sizeof(KdTraceCost) : 1, "centre ray walk costs");
     // The primary hits of one launch's rows (all of its pixels' primary rays), when packets trace
     // them; in-order queue, so one buffer serves every launch.
     const std::size_t traced_rays = step * view.width * kd_primary_rays_per_pixel(&view);
@@ -282,6 +297,7 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
     frame.hits.hits.resize(pixels);
     std::vector<float> normal_floats(inputs.normals ? pixels * 3 : 0);
     std::vector<KdRayCounts> pixel_counts(count_rays ? pixels : 0);
+    if (inputs.cost) frame.hits.costs.resize(pixels);
     const std::string reading = "reading back a frame";
     device.enqueue_read(b.rgb, 0, pixels * 3 * sizeof(float), frame.image.rgb.data(), reading);
     device.enqueue_read(b.hits, 0, pixels * sizeof(KdHit), frame.hits.hits.data(), reading);
@@ -290,6 +306,9 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
                             reading);
     if (count_rays)
         device.enqueue_read(b.counts, 0, pixels * sizeof(KdRayCounts), pixel_counts.data(),
+                            reading);
+    if (inputs.cost)
+        device.enqueue_read(b.costs, 0, pixels * sizeof(KdTraceCost), frame.hits.costs.data(),
                             reading);
     device.finish(reading);
     if (inputs.normals) {

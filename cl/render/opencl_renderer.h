@@ -28,6 +28,7 @@ struct OpenClRenderChoice {
     /// The triangle test's exact steps in double (true) or float-float (core/kd_float_float.h).
     bool fp64 = true;
     std::string pixel_kernel;  // kd_render_pixels or kd_shade_traced_pixels
+    bool cost = false;         // kd_trace_costs after the pixels (the cost AOV)
 
     auto operator<=>(const OpenClRenderChoice&) const = default;
 };
@@ -45,7 +46,7 @@ const char* exact_arithmetic_name(bool fp64);
 /// triangle test by cl/runtime/program_cache); packet and shadow only where the choice uses them.
 struct OpenClRenderPlan {
     OpenClRenderChoice choice;
-    cl::Kernel pixel, packet, shadow;
+    cl::Kernel pixel, packet, shadow, cost;
 };
 OpenClRenderPlan plan_opencl_render(ClDevice& device, const OpenClRenderChoice& choice);
 

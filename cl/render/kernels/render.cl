@@ -273,6 +273,27 @@ __kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u
                        normals, ray_counts, traced, occluded, 0);
 }
 
+/* The `cost` AOV of the launch's pixels (kd_pixel_cost: the centre ray's walk, counted), into
+ * costs[y * width + x]; launched after the pixels only for frames that write it. The walk reads
+ * only the tree, its box and the triangle test, so the view's shading arrays stay unset. */
+__kernel void kd_trace_costs(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
+                             __global const float* triangles, const KdRenderLaunch launch,
+                             __global KdTraceCost* costs) {
+    const kd_u32 x = (kd_u32)get_global_id(0);
+    const kd_u32 row = (kd_u32)get_global_id(1);
+    if (x >= launch.view.width || row >= launch.rows) return;
+    KdSceneView scene;
+    scene.nodes = nodes;
+    scene.leaf_indices = leaf_indices;
+    scene.triangles = triangles;
+    for (int i = 0; i < 6; ++i) scene.bounds[i] = launch.bounds[i];
+    scene.intersect = KDRAY_COMPILED_INTERSECT;
+    const kd_u32 y = launch.first_row + row;
+    KdTraceCost cost;
+    kd_pixel_cost(&scene, &launch.view, x, y, &cost);
+    costs[(size_t)y * launch.view.width + x] = cost;
+}
+
 #if KDRAY_COMPILED_PACKETS
 /* kd_render_pixels for spp 1 with the primary hits traced, in a kernel without reflection and
  * refraction: kd_render_pixel's one sample and its shading, nothing else. */

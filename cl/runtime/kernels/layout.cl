@@ -4,13 +4,13 @@
  * one sizeof each, in the order KdNode, KdRay, KdHit, KdMaterial, KdLight, KdView, KdRayCounts,
  * KdBuildBox, KdBuildNode, KdSmallNode, KdLargeNode, KdLargeSplit, KdLargeCuts, KdSmallRoot,
  * KdLargeSplitArgs, KdLargeLevelArgs, KdSmallBatchArgs, KdEmitter, KdTexture, KdSmallLevelNode,
- * KdSceneLayout, KdRenderLaunch. */
+ * KdSceneLayout, KdRenderLaunch, KdTraceCost. */
 #include "core/kd_build_shared.h"
 #include "core/kd_shared.h"
 
 __kernel void kd_report_layout(__global uint* out) {
     if (get_global_id(0) != 0) return;
-    out[0] = 22;
+    out[0] = 23;
     out[1] = sizeof(KdNode);
     out[2] = sizeof(KdRay);
     out[3] = sizeof(KdHit);
@@ -33,4 +33,5 @@ __kernel void kd_report_layout(__global uint* out) {
     out[20] = sizeof(KdSmallLevelNode);
     out[21] = sizeof(KdSceneLayout);
     out[22] = sizeof(KdRenderLaunch);
+    out[23] = sizeof(KdTraceCost);
 }
