@@ -60,22 +60,31 @@ bool use_packets(const ClDevice& device, kd_u32 intersect, RenderInputs::Packets
 /// frame_000, 1024x768 primary rays, 2 cores, medians of 5).
 constexpr std::size_t kTileWidth = 8, kTileHeight = 8;
 
+}  // namespace
+
 /// Build options of the render program: its effects, its triangle test, and whether it holds the
 /// packet kernels (only where the choice uses them: CPU devices). Correctly rounded division and
 /// square root, where the device offers them, make the device's camera rays and normals round as
 /// the host's do (a GPU's default single-precision divide and sqrt may be off by an ulp or more);
 /// a CPU device rounds correctly either way. Nothing that changes float results (fast or relaxed
 /// math) is used.
-std::string render_options(const ClDevice& device, const OpenClRenderChoice& choice) {
+std::string render_program_defines(const OpenClRenderChoice& choice,
+                                   bool correctly_rounded_divide_sqrt) {
     std::string options = "-DKDRAY_COMPILED_EFFECTS=" + std::to_string(choice.effects) +
                           " -DKDRAY_COMPILED_INTERSECT=" + std::to_string(choice.intersect) +
                           " -DKDRAY_COMPILED_PACKETS=" + (choice.packets ? "1" : "0");
-    cl_device_fp_config fp = 0;
-    if (clGetDeviceInfo(device.device()(), CL_DEVICE_SINGLE_FP_CONFIG, sizeof(fp), &fp, nullptr) ==
-            CL_SUCCESS &&
-        (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT))
-        options += " -cl-fp32-correctly-rounded-divide-sqrt";
+    if (correctly_rounded_divide_sqrt) options += " -cl-fp32-correctly-rounded-divide-sqrt";
     return options;
+}
+
+namespace {
+
+std::string render_options(const ClDevice& device, const OpenClRenderChoice& choice) {
+    cl_device_fp_config fp = 0;
+    const bool correctly_rounded = clGetDeviceInfo(device.device()(), CL_DEVICE_SINGLE_FP_CONFIG,
+                                                   sizeof(fp), &fp, nullptr) == CL_SUCCESS &&
+                                   (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT);
+    return render_program_defines(choice, correctly_rounded);
 }
 
 std::size_t round_up(std::size_t n, std::size_t multiple) {

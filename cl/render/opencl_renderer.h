@@ -39,6 +39,12 @@ struct OpenClRenderPlan {
 };
 OpenClRenderPlan plan_opencl_render(ClDevice& device, const OpenClRenderChoice& choice);
 
+/// The -D and -cl options of the render program (render.cl) for `choice` on a device that does
+/// or does not offer correctly rounded single-precision divide and sqrt
+/// (CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT); cl/program_catalogue.cpp lists them all from here.
+std::string render_program_defines(const OpenClRenderChoice& choice,
+                                   bool correctly_rounded_divide_sqrt);
+
 /// Runs each of the plan's kernels once on an empty image, so that the device compiler's
 /// first-launch work (PoCL compiles a kernel per work-group size on its first launch) is done
 /// before the first frame is timed.
