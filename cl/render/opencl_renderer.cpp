@@ -111,44 +111,45 @@ struct LaunchRows {
 
 /// kd_render_pixels or kd_shade_traced_pixels (the same arguments) over the launch's rows, in
 /// tiles. A width of 0 (the warm-up's empty view) still launches one tile.
-void launch_pixels(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
+void launch_pixels(ClDevice& device, cl::Kernel& kernel, Tile tile, const RenderBuffers& b,
                    const KdRenderLaunch& launch) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.scene_data, b.layout, launch,
                     b.rgb, b.hits, b.normals, b.counts, b.traced, b.occluded);
     device.queue().enqueueNDRangeKernel(
         kernel, cl::NullRange,
-        cl::NDRange(round_up(std::max<std::size_t>(1, launch.view.width), kTileWidth),
-                    round_up(launch.rows, kTileHeight)),
-        cl::NDRange(kTileWidth, kTileHeight));
+        cl::NDRange(round_up(std::max<std::size_t>(1, launch.view.width), tile.width),
+                    round_up(launch.rows, tile.height)),
+        cl::NDRange(tile.width, tile.height));
 }
 
 /// A packet kernel's launch over the launch's rows: a work-item per tile and primary ray of its
 /// pixels.
-void enqueue_packet_tiles(ClDevice& device, cl::Kernel& kernel, const KdRenderLaunch& launch) {
+void enqueue_packet_tiles(ClDevice& device, cl::Kernel& kernel, std::size_t group,
+                          const KdRenderLaunch& launch) {
     // At least one tile: the warm-up's empty view would make a global size of 0, which OpenCL
     // 1.2 rejects (each work-item returns at once past the image).
     const std::size_t tiles_x =
         std::max<std::size_t>(1, (launch.view.width + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE);
     const std::size_t tiles_y = (launch.rows + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
     device.queue().enqueueNDRangeKernel(kernel, cl::NullRange,
-                                        cl::NDRange(round_up(tiles_x, kPacketGroup), tiles_y,
+                                        cl::NDRange(round_up(tiles_x, group), tiles_y,
                                                     kd_primary_rays_per_pixel(&launch.view)),
-                                        cl::NDRange(kPacketGroup, 1, 1));
+                                        cl::NDRange(group, 1, 1));
 }
 
 /// kd_trace_camera_packets over the launch's rows.
-void launch_camera_packets(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
-                           const KdRenderLaunch& launch) {
+void launch_camera_packets(ClDevice& device, cl::Kernel& kernel, std::size_t group,
+                           const RenderBuffers& b, const KdRenderLaunch& launch) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, launch, b.traced);
-    enqueue_packet_tiles(device, kernel, launch);
+    enqueue_packet_tiles(device, kernel, group, launch);
 }
 
 /// kd_trace_shadow_packets over the launch's rows.
-void launch_shadow_packets(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
-                           const KdRenderLaunch& launch) {
+void launch_shadow_packets(ClDevice& device, cl::Kernel& kernel, std::size_t group,
+                           const RenderBuffers& b, const KdRenderLaunch& launch) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.scene_data, b.layout, launch,
                     b.traced, b.occluded);
-    enqueue_packet_tiles(device, kernel, launch);
+    enqueue_packet_tiles(device, kernel, group, launch);
 }
 
 /// The launch record of a frame's launches, their rows unset.
@@ -168,9 +169,11 @@ void launch_rows(ClDevice& device, OpenClRenderPlan& plan, const RenderBuffers& 
                  KdRenderLaunch launch, LaunchRows rows) {
     launch.first_row = kd_u32(rows.first);
     launch.rows = kd_u32(rows.count);
-    if (plan.choice.packets) launch_camera_packets(device, plan.packet, b, launch);
-    if (plan.choice.shadow_packets) launch_shadow_packets(device, plan.shadow, b, launch);
-    launch_pixels(device, plan.pixel, b, launch);
+    if (plan.choice.packets)
+        launch_camera_packets(device, plan.packet, plan.packet_group, b, launch);
+    if (plan.choice.shadow_packets)
+        launch_shadow_packets(device, plan.shadow, plan.packet_group, b, launch);
+    launch_pixels(device, plan.pixel, plan.tile, b, launch);
 }
 
 }  // namespace
@@ -204,6 +207,18 @@ OpenClRenderPlan plan_opencl_render(ClDevice& device, const OpenClRenderChoice& 
     plan.pixel = make_kernel(program, choice.pixel_kernel.c_str());
     if (choice.packets) plan.packet = make_kernel(program, "kd_trace_camera_packets");
     if (choice.shadow_packets) plan.shadow = make_kernel(program, "kd_trace_shadow_packets");
+    // One packet group for both packet kernels: the smaller of what each allows.
+    const cl_device_id id = device.device()();
+    plan.tile = choose_tile(choice.pixel_kernel, query_kernel_limits(plan.pixel, id),
+                            {kTileWidth, kTileHeight});
+    plan.packet_group = kPacketGroup;
+    if (choice.packets)
+        plan.packet_group = choose_group_1d("kd_trace_camera_packets",
+                                           query_kernel_limits(plan.packet, id), kPacketGroup);
+    if (choice.shadow_packets)
+        plan.packet_group = std::min(
+            plan.packet_group, choose_group_1d("kd_trace_shadow_packets",
+                                               query_kernel_limits(plan.shadow, id), kPacketGroup));
     return plan;
 }
 

@@ -12,6 +12,7 @@
 
 #include "cl/build/opencl_builder.h"
 #include "cl/runtime/device.h"
+#include "cl/runtime/work_group.h"
 #include "core/frame.h"
 #include "core/kd_tree.h"
 #include "core/render_setup.h"
@@ -36,6 +37,10 @@ OpenClRenderChoice choose_opencl_render(const ClDevice& device, const RenderInpu
 struct OpenClRenderPlan {
     OpenClRenderChoice choice;
     cl::Kernel pixel, packet, shadow;
+    /// The pixel kernel's tile and the packet kernels' tiles per group, from the device's limits
+    /// (cl/runtime/work_group.h): 8x8 and 4 where allowed.
+    Tile tile;
+    std::size_t packet_group = 0;
 };
 OpenClRenderPlan plan_opencl_render(ClDevice& device, const OpenClRenderChoice& choice);
 
