@@ -312,6 +312,36 @@ def fuzz_runs():
                   "corpus files", "peak RSS MB", "findings"], rows, data)
 
 
+# ---- docs/gpu-kernels.md: each kernel compiled for NVIDIA and AMD ---------------------------------
+
+def gpu_kernels():
+    data = load("gpu-kernels")
+    budgets = data.value["budgets"]
+    by_kernel = {}
+    for r in data.rows:
+        by_kernel.setdefault((r["file"], r["kernel"]), {})[r["target"]] = r
+
+    def span(r):
+        lo, hi = r["private_min"], r["private"]
+        return f"{hi}" if lo == hi else f"{lo}–{hi}"
+
+    rows = []
+    for (file, kernel), t in sorted(by_kernel.items()):
+        nv, amd = t.get("nvptx", {}), t.get("amdgcn", {})
+        budget = budgets["private_bytes_of"].get(kernel, budgets["private_bytes"])
+        rows.append([f"`{kernel}`", file, nv.get("programs", amd.get("programs", "")),
+                     span(nv) if nv else "", nv.get("local", ""), span(amd) if amd else "",
+                     amd.get("local", ""), amd.get("vgprs", ""), amd.get("occupancy", ""),
+                     budget])
+    problems = data.value.get("problems", [])
+    verdict = ("No symbol is left unresolved and every kernel is inside its budgets "
+               f"({data.value['programs']} programs, both targets, -O0 and -O2)."
+               if not problems else "Problems: " + "; ".join(problems))
+    return verdict + "\n\n" + table(
+        ["kernel", "file", "programs", "NVIDIA private B", "NVIDIA local B", "AMD private B",
+         "AMD local B", "AMD VGPRs", "AMD waves/SIMD", "private budget B"], rows, data)
+
+
 TABLES = {
     "performance": performance,
     "cold-build": cold_build,
@@ -325,6 +355,7 @@ TABLES = {
     "robustness-leaks": robustness_leaks,
     "fuzz-runs": fuzz_runs,
     "numerics-cost": numerics_cost,
+    "gpu-kernels": gpu_kernels,
 }
 
 

@@ -13,12 +13,9 @@ BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins) {
     return cached_kernels<BuilderKernels>(device, std::to_string(large_split_bins), [&] {
         // -D only for compile-time choices; the layouts and constants are core/kd_build_shared.h's.
         const cl::Program large =
-            cached_program(device, "build_large.cl",
-                           "-DKDRAY_LARGE_BINS=" + std::to_string(large_split_bins) + "u");
-        // CPU compilers may have no vector popcount (build_small_search.cl, kd_popcount8).
+            cached_program(device, "build_large.cl", large_program_defines(large_split_bins));
         const cl::Program small =
-            cached_program(device, "build_small.cl",
-                           std::string("-DKDRAY_SWAR_POPCOUNT=") + (device.is_cpu() ? "1" : "0"));
+            cached_program(device, "build_small.cl", small_program_defines(device.is_cpu()));
         const cl::Program output = cached_program(device, "build_output.cl");
         BuilderKernels k;
         k.compute_aabbs = make_kernel(large, "kd_compute_aabbs");
@@ -52,6 +49,15 @@ BuildContext::~BuildContext() {
     } catch (const Error&) {
         // A failed queue runs nothing more, so nothing reads the memory either.
     }
+}
+
+std::string large_program_defines(int large_split_bins) {
+    return "-DKDRAY_LARGE_BINS=" + std::to_string(large_split_bins) + "u";
+}
+
+std::string small_program_defines(bool cpu_device) {
+    // CPU compilers may have no vector popcount (build_small_search.cl, kd_popcount8).
+    return std::string("-DKDRAY_SWAR_POPCOUNT=") + (cpu_device ? "1" : "0");
 }
 
 cl_uint BuildContext::read_uint(const DeviceArray& array, std::size_t index) {

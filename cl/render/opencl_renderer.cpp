@@ -58,24 +58,33 @@ bool use_packets(const ClDevice& device, kd_u32 intersect, RenderInputs::Packets
 /// frame_000, 1024x768 primary rays, 2 cores, medians of 5).
 constexpr std::size_t kTileWidth = 8, kTileHeight = 8;
 
+}  // namespace
+
 /// Build options of the render program: its effects, its triangle test, and whether it holds the
 /// packet kernels (only where the choice uses them: CPU devices). Correctly rounded division and
 /// square root, where the device offers them, make the device's camera rays and normals round as
 /// the host's do (a GPU's default single-precision divide and sqrt may be off by an ulp or more);
 /// a CPU device rounds correctly either way. Nothing that changes float results (fast or relaxed
 /// math) is used.
-std::string render_options(const ClDevice& device, const OpenClRenderChoice& choice) {
+std::string render_program_defines(const OpenClRenderChoice& choice,
+                                   bool correctly_rounded_divide_sqrt) {
     std::string options = "-DKDRAY_COMPILED_EFFECTS=" + std::to_string(choice.effects) +
                           " -DKDRAY_COMPILED_INTERSECT=" + std::to_string(choice.intersect) +
                           " -DKDRAY_COMPILED_PACKETS=" + (choice.packets ? "1" : "0");
     // Without it a device with fp64 would take the double path whatever the host decided.
     if (!choice.fp64) options += " -DKDRAY_FORCE_NO_FP64=1";
-    cl_device_fp_config fp = 0;
-    if (clGetDeviceInfo(device.device()(), CL_DEVICE_SINGLE_FP_CONFIG, sizeof(fp), &fp, nullptr) ==
-            CL_SUCCESS &&
-        (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT))
-        options += " -cl-fp32-correctly-rounded-divide-sqrt";
+    if (correctly_rounded_divide_sqrt) options += " -cl-fp32-correctly-rounded-divide-sqrt";
     return options;
+}
+
+namespace {
+
+std::string render_options(const ClDevice& device, const OpenClRenderChoice& choice) {
+    cl_device_fp_config fp = 0;
+    const bool correctly_rounded = clGetDeviceInfo(device.device()(), CL_DEVICE_SINGLE_FP_CONFIG,
+                                                   sizeof(fp), &fp, nullptr) == CL_SUCCESS &&
+                                   (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT);
+    return render_program_defines(choice, correctly_rounded);
 }
 
 std::size_t round_up(std::size_t n, std::size_t multiple) {
@@ -102,53 +111,54 @@ struct LaunchRows {
 
 /// kd_render_pixels or kd_shade_traced_pixels (the same arguments) over the launch's rows, in
 /// tiles. A width of 0 (the warm-up's empty view) still launches one tile.
-void launch_pixels(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
+void launch_pixels(ClDevice& device, cl::Kernel& kernel, Tile tile, const RenderBuffers& b,
                    const KdRenderLaunch& launch) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.scene_data, b.layout, launch,
                     b.rgb, b.hits, b.normals, b.counts, b.traced, b.occluded);
     device.launch(kernel,
-                  cl::NDRange(round_up(std::max<std::size_t>(1, launch.view.width), kTileWidth),
-                              round_up(launch.rows, kTileHeight)),
-                  cl::NDRange(kTileWidth, kTileHeight));
+                  cl::NDRange(round_up(std::max<std::size_t>(1, launch.view.width), tile.width),
+                              round_up(launch.rows, tile.height)),
+                  cl::NDRange(tile.width, tile.height));
 }
 
 /// A packet kernel's launch over the launch's rows: a work-item per tile and primary ray of its
 /// pixels.
-void enqueue_packet_tiles(ClDevice& device, cl::Kernel& kernel, const KdRenderLaunch& launch) {
+void enqueue_packet_tiles(ClDevice& device, cl::Kernel& kernel, std::size_t group,
+                          const KdRenderLaunch& launch) {
     // At least one tile: the warm-up's empty view would make a global size of 0, which OpenCL
     // 1.2 rejects (each work-item returns at once past the image).
     const std::size_t tiles_x =
         std::max<std::size_t>(1, (launch.view.width + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE);
     const std::size_t tiles_y = (launch.rows + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
     device.launch(kernel,
-                  cl::NDRange(round_up(tiles_x, kPacketGroup), tiles_y,
+                  cl::NDRange(round_up(tiles_x, group), tiles_y,
                               kd_primary_rays_per_pixel(&launch.view)),
-                  cl::NDRange(kPacketGroup, 1, 1));
+                  cl::NDRange(group, 1, 1));
 }
 
 /// kd_trace_camera_packets over the launch's rows.
-void launch_camera_packets(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
-                           const KdRenderLaunch& launch) {
+void launch_camera_packets(ClDevice& device, cl::Kernel& kernel, std::size_t group,
+                           const RenderBuffers& b, const KdRenderLaunch& launch) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, launch, b.traced);
-    enqueue_packet_tiles(device, kernel, launch);
+    enqueue_packet_tiles(device, kernel, group, launch);
 }
 
 /// kd_trace_shadow_packets over the launch's rows.
-void launch_shadow_packets(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
-                           const KdRenderLaunch& launch) {
+void launch_shadow_packets(ClDevice& device, cl::Kernel& kernel, std::size_t group,
+                           const RenderBuffers& b, const KdRenderLaunch& launch) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.scene_data, b.layout, launch,
                     b.traced, b.occluded);
-    enqueue_packet_tiles(device, kernel, launch);
+    enqueue_packet_tiles(device, kernel, group, launch);
 }
 
 /// kd_trace_costs over the launch's rows, in the pixel kernels' tiles.
-void launch_costs(ClDevice& device, cl::Kernel& kernel, const RenderBuffers& b,
+void launch_costs(ClDevice& device, cl::Kernel& kernel, Tile tile, const RenderBuffers& b,
                   const KdRenderLaunch& launch) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, launch, b.costs);
     device.launch(kernel,
-                  cl::NDRange(round_up(std::max<std::size_t>(1, launch.view.width), kTileWidth),
-                              round_up(launch.rows, kTileHeight)),
-                  cl::NDRange(kTileWidth, kTileHeight));
+                  cl::NDRange(round_up(std::max<std::size_t>(1, launch.view.width), tile.width),
+                              round_up(launch.rows, tile.height)),
+                  cl::NDRange(tile.width, tile.height));
 }
 
 /// The launch record of a frame's launches, their rows unset.
@@ -168,10 +178,12 @@ void launch_rows(ClDevice& device, OpenClRenderPlan& plan, const RenderBuffers& 
                  KdRenderLaunch launch, LaunchRows rows) {
     launch.first_row = kd_u32(rows.first);
     launch.rows = kd_u32(rows.count);
-    if (plan.choice.packets) launch_camera_packets(device, plan.packet, b, launch);
-    if (plan.choice.shadow_packets) launch_shadow_packets(device, plan.shadow, b, launch);
-    launch_pixels(device, plan.pixel, b, launch);
-    if (plan.choice.cost) launch_costs(device, plan.cost, b, launch);
+    if (plan.choice.packets)
+        launch_camera_packets(device, plan.packet, plan.packet_group, b, launch);
+    if (plan.choice.shadow_packets)
+        launch_shadow_packets(device, plan.shadow, plan.packet_group, b, launch);
+    launch_pixels(device, plan.pixel, plan.tile, b, launch);
+    if (plan.choice.cost) launch_costs(device, plan.cost, plan.tile, b, launch);
 }
 
 }  // namespace
@@ -218,6 +230,18 @@ OpenClRenderPlan plan_opencl_render(ClDevice& device, const OpenClRenderChoice& 
     if (choice.packets) plan.packet = make_kernel(program, "kd_trace_camera_packets");
     if (choice.shadow_packets) plan.shadow = make_kernel(program, "kd_trace_shadow_packets");
     if (choice.cost) plan.cost = make_kernel(program, "kd_trace_costs");
+    // One packet group for both packet kernels: the smaller of what each allows.
+    const cl_device_id id = device.device()();
+    plan.tile = choose_tile(choice.pixel_kernel, query_kernel_limits(plan.pixel, id),
+                            {kTileWidth, kTileHeight});
+    plan.packet_group = kPacketGroup;
+    if (choice.packets)
+        plan.packet_group = choose_group_1d("kd_trace_camera_packets",
+                                           query_kernel_limits(plan.packet, id), kPacketGroup);
+    if (choice.shadow_packets)
+        plan.packet_group = std::min(
+            plan.packet_group, choose_group_1d("kd_trace_shadow_packets",
+                                               query_kernel_limits(plan.shadow, id), kPacketGroup));
     return plan;
 }
 

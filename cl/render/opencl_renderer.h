@@ -12,6 +12,7 @@
 
 #include "cl/build/opencl_builder.h"
 #include "cl/runtime/device.h"
+#include "cl/runtime/work_group.h"
 #include "core/frame.h"
 #include "core/kd_tree.h"
 #include "core/render_setup.h"
@@ -47,8 +48,18 @@ const char* exact_arithmetic_name(bool fp64);
 struct OpenClRenderPlan {
     OpenClRenderChoice choice;
     cl::Kernel pixel, packet, shadow, cost;
+    /// The pixel kernel's tile and the packet kernels' tiles per group, from the device's limits
+    /// (cl/runtime/work_group.h): 8x8 and 4 where allowed.
+    Tile tile;
+    std::size_t packet_group = 0;
 };
 OpenClRenderPlan plan_opencl_render(ClDevice& device, const OpenClRenderChoice& choice);
+
+/// The -D and -cl options of the render program (render.cl) for `choice` on a device that does
+/// or does not offer correctly rounded single-precision divide and sqrt
+/// (CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT); cl/program_catalogue.cpp lists them all from here.
+std::string render_program_defines(const OpenClRenderChoice& choice,
+                                   bool correctly_rounded_divide_sqrt);
 
 /// Runs each of the plan's kernels once on an empty image, so that the device compiler's
 /// first-launch work (PoCL compiles a kernel per work-group size on its first launch) is done

@@ -7,7 +7,10 @@
 // it meets, and left to itself it picks the local size from the global size, which changes at
 // every level of a build. Each new size was a compile (first run) or a dlopen of the cached
 // variant (every later run): 8% of a kitchen build's profile sat in ld.so's symbol lookup. With
-// one size each kernel has one variant. 64 is a warp/wavefront multiple on GPUs.
+// one size each kernel has one variant. 64 is a warp/wavefront multiple on GPUs. A device or
+// kernel that allows less gets the largest power of two it allows (work_group.h), which still
+// divides the rounded global size; the limits are queried at each launch (a few getters, next to
+// an enqueue) so that no stale cache can outlive a kernel.
 #pragma once
 
 #include <cstddef>
@@ -17,6 +20,7 @@
 
 #include "cl/runtime/cl_error.h"
 #include "cl/runtime/device.h"
+#include "cl/runtime/work_group.h"
 #include "core/kd_build_shared.h"
 
 namespace kdray {
@@ -35,8 +39,12 @@ void enqueue_kernel(ClDevice& device, cl::Kernel& kernel, std::size_t count, con
     if (count == 0) return;
     try {
         set_kernel_args(kernel, args...);
-        const std::size_t group = KDRAY_LAUNCH_GROUP;
-        const std::size_t global = (count + group - 1) / group * group;
+        const std::size_t global =
+            (count + KDRAY_LAUNCH_GROUP - 1) / KDRAY_LAUNCH_GROUP * KDRAY_LAUNCH_GROUP;
+        const std::size_t group = choose_group_1d(
+            kernel.getInfo<CL_KERNEL_FUNCTION_NAME>(),
+            query_kernel_limits(kernel, device.queue().getInfo<CL_QUEUE_DEVICE>()()),
+            KDRAY_LAUNCH_GROUP);
         device.launch(kernel, cl::NDRange(global), cl::NDRange(group));
     } catch (const cl::Error& e) {
         throw_cl_error("running kernel " + kernel.getInfo<CL_KERNEL_FUNCTION_NAME>() + " over " +

@@ -23,12 +23,16 @@ double compile_ms = 0;
 
 }  // namespace
 
-cl::Program cached_program(const ClDevice& device, std::string_view file,
-                           const std::string& defines) {
+std::string program_build_options(const std::string& defines) {
     // -w: PoCL prints its compiler's warnings on stderr ("145 warnings generated.", clang's
     // -Wpsabi notes on 16-lane vectors wherever the CPU lacks AVX-512), where they would land
     // between kdray's own lines; errors still fail the build with the log.
-    const std::string options = "-cl-std=CL1.2 -w" + (defines.empty() ? "" : " " + defines);
+    return "-cl-std=CL1.2 -w" + (defines.empty() ? "" : " " + defines);
+}
+
+cl::Program cached_program(const ClDevice& device, std::string_view file,
+                           const std::string& defines) {
+    const std::string options = program_build_options(defines);
     ProgramCache& cache = device.program_cache();
     ProgramCache::Key key{std::string(file), options};
     std::lock_guard<std::mutex> lock(cache.programs_mutex);

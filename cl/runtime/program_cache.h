@@ -51,6 +51,10 @@ class ProgramCache {
 cl::Program cached_program(const ClDevice& device, std::string_view file,
                            const std::string& defines = "");
 
+/// The build options cached_program passes for `defines`: "-cl-std=CL1.2 -w <defines>" (-w: no
+/// warnings on stderr). Also what kdray_programs prints for the GPU compile check.
+std::string program_build_options(const std::string& defines);
+
 /// What the cache tells its listener: a program's build starting (done false) or ended (done
 /// true, after ms milliseconds, failed or not).
 struct ProgramBuildEvent {

@@ -1,0 +1,54 @@
+#include "cl/program_catalogue.h"
+
+#include <set>
+
+#include "cl/build/build_context.h"
+#include "cl/render/opencl_renderer.h"
+#include "cl/runtime/program_cache.h"
+#include "core/build_quality.h"
+#include "core/kd_intersect_moller.h"
+
+namespace kdray {
+
+std::vector<ProgramSpec> buildable_programs(bool cpu_device, bool correctly_rounded_divide_sqrt) {
+    std::vector<ProgramSpec> programs;
+    auto add = [&](const char* file, const std::string& defines) {
+        programs.push_back({file, program_build_options(defines)});
+    };
+    add("primitives.cl", "");
+
+    // Builder: one large-stage program per bin count (BuildParams::large_split_bins).
+    std::set<int> bins{0, kMaxLargeSplitBins};
+    for (BuildQuality q : {BuildQuality::Low, BuildQuality::Medium, BuildQuality::High})
+        bins.insert(with_build_quality(BuildParams{}, q).large_split_bins);
+    for (int b : bins) add("build_large.cl", build_detail::large_program_defines(b));
+    add("build_small.cl", build_detail::small_program_defines(cpu_device));
+    add("build_output.cl", "");
+
+    // Renderer: every set of KDRAY_EFFECT_* bits, each triangle test, and packets where
+    // choose_opencl_render puts them by default (CPU devices, watertight test; --packets off
+    // leaves them out there). `--packets on` on a GPU is left out: a CPU-only path there.
+    constexpr kd_u32 kAllEffects = KDRAY_EFFECT_SHADOWS | KDRAY_EFFECT_REFLECTION |
+                                   KDRAY_EFFECT_REFRACTION | KDRAY_EFFECT_AMBIENT |
+                                   KDRAY_EFFECT_AREA_LIGHTS | KDRAY_EFFECT_TEXTURES;
+    for (kd_u32 intersect : {KDRAY_INTERSECT_WATERTIGHT, KDRAY_INTERSECT_MOLLER})
+        for (kd_u32 effects = 0; effects <= kAllEffects; ++effects) {
+            OpenClRenderChoice choice;
+            choice.effects = effects;
+            choice.intersect = intersect;
+            add("render.cl", render_program_defines(choice, correctly_rounded_divide_sqrt));
+            // A device without fp64 (Intel Arc, Xe-LP) gets the float-float path: once per
+            // triangle test, with every effect.
+            if (effects == kAllEffects) {
+                choice.fp64 = false;
+                add("render.cl", render_program_defines(choice, correctly_rounded_divide_sqrt));
+                choice.fp64 = true;
+            }
+            choice.packets = true;
+            if (cpu_device && intersect == KDRAY_INTERSECT_WATERTIGHT)
+                add("render.cl", render_program_defines(choice, correctly_rounded_divide_sqrt));
+        }
+    return programs;
+}
+
+}  // namespace kdray
