@@ -70,6 +70,20 @@ int TextureLoader::load(const std::string& material, const std::string& statemen
     const std::vector<float>& pixels = image.values;
     // Integer images hold sRGB-encoded values; float images linear ones.
     const bool srgb = image.integer;
+    // A texel scales Kd, whose values must be finite numbers >= 0 (mtl_prepare.cpp): a float
+    // image's NaN, inf or negative texels flowed into the image, exit 0, without a word.
+    if (!srgb) {
+        const std::size_t count = std::size_t(image.width) * image.height * channels;
+        for (std::size_t i = 0; i < count; ++i)
+            if (const float v = pixels[i]; !(std::isfinite(v) && v >= 0.0f)) {
+                loaded_[path] = -1;
+                const std::size_t pixel = i / channels;
+                return warn("cannot be read (" + path.string() + ": texel (" +
+                            std::to_string(pixel % image.width) + ", " +
+                            std::to_string(pixel / image.width) + ") is " + std::to_string(v) +
+                            ", not a finite number >= 0)");
+            }
+    }
     KdTexture entry{};
     entry.offset = kd_u32(scene_.texels.size() / 4);
     entry.width = kd_u32(image.width);

@@ -10,6 +10,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -168,6 +170,91 @@ TEST_CASE("compare reads its images under the input budgets: an error naming the
                 CHECK(r.err.find(reason(kind)) != std::string::npos);
             }
             fs::remove(bad);
+        }
+    }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a float texture's texels must be finite and >= 0, as Kd values are") {
+    // An EXR texel of NaN, inf or -1 scales Kd as a Kd value would, but flowed into the image
+    // (exit 0, no word) where the same value in Kd is refused. One warning naming the file and
+    // the texel; the material renders untextured, the same image as without map_Kd.
+    const Scenes s = quad_scenes("hostile-textures-texels");
+    write_text_file(s.dir / "textured.mtl", "newmtl t\nKd 0.5 0.7 0.9\nmap_Kd tex.exr\n");
+    REQUIRE(render(s, s.plain, s.dir / "plain").status == 0);
+    const std::string expected = read_file(s.dir / "plain" / "plain.png");
+    const float half = 0.5f;
+    for (const float bad : {NAN, INFINITY, -1.0f}) {
+        CAPTURE(bad);
+        // 3 x 2 linear float texels of 0.5 but texel (1, 1)'s green, written by the codec
+        // directly (write_image keeps what it writes finite).
+        kdray::ExrImage texture{3, 2, {{"R"}, {"G"}, {"B"}}};
+        for (kdray::ExrChannel& c : texture.channels) {
+            c.words.resize(6);
+            for (std::uint32_t& w : c.words) std::memcpy(&w, &half, 4);
+        }
+        std::memcpy(&texture.channels[1].words[4], &bad, 4);
+        write_text_file(s.dir / "tex.exr", kdray::encode_exr(texture));
+        const fs::path out = s.dir / "out";
+        fs::remove_all(out);
+        const CommandResult r = render(s, s.textured, out);
+        INFO("stderr: " << r.err);
+        CHECK(r.status == 0);
+        CHECK(r.err.rfind("kdray: warning: ", 0) == 0);
+        CHECK(lines(r.err) == 1);
+        CHECK(r.err.find((s.dir / "tex.exr").string() + ": texel (1, 1)") != std::string::npos);
+        CHECK(r.err.find("not a finite number >= 0") != std::string::npos);
+        CHECK(read_file(out / "textured.png") == expected);
+    }
+    // Large finite texels are values like any other: read, no warning.
+    kdray::Image bright;
+    bright.width = bright.height = 1;
+    bright.rgb = {1e30f, 0.0f, 2.0f};
+    kdray::write_image(s.dir / "tex.exr", bright);
+    const CommandResult r = render(s, s.textured, s.dir / "bright");
+    INFO("stderr: " << r.err);
+    CHECK(r.status == 0);
+    CHECK(r.err.empty());
+    fs::remove_all(s.dir);
+}
+
+TEST_CASE("radiance sums saturate at the largest float instead of reaching inf") {
+    // Ke 3e38 is a finite Ke >= 0 and accepted, but 16 samples of it summed to inf in the pixel,
+    // and emission plus direct light in one sample can pass FLT_MAX too. Every sum saturates at
+    // FLT_MAX on both tracers: the EXR holds finite values, the emitter at least FLT_MAX / 16
+    // (where each sample is FLT_MAX or more), and an ordinary emitter is untouched: Ke 0.25 alone
+    // in the dark is exactly 0.25 in every pixel it covers.
+    const fs::path dir = fresh_temp_dir("hostile-textures-ke");
+    // A quad far wider than the view: every pixel sees it.
+    const std::string quad = "v -100 -100 0\nv 100 -100 0\nv 100 100 0\nv -100 100 0\nf 1 2 3 4\n";
+    const fs::path camera = write_text_file(
+        dir / "cam.json",
+        R"({"image":{"width":8,"height":6,"spp":16},"camera":{"position":[0,0,1],"look_at":[0,0,0]}})");
+    for (const char* path : {"reference", "opencl"}) {
+        for (const char* ke : {"3e38", "0.25"}) {
+            CAPTURE(path);
+            CAPTURE(ke);
+            write_text_file(dir / "ke.mtl", std::string("newmtl e\nKd 0 0 0\nKe ") + ke + "\n");
+            const fs::path obj =
+                write_text_file(dir / "ke.obj", "mtllib ke.mtl\nusemtl e\n" + quad);
+            const fs::path out = dir / (std::string(path) + ke);
+            const CommandResult r =
+                run_kdray({"render", obj.string(), "-o", out.string(), "--camera", camera.string(),
+                           "--builder", path, "--tracer", path, "-q", "--format", "exr"},
+                          kNoHang);
+            INFO("stderr: " << r.err);
+            REQUIRE(r.status == 0);
+            const kdray::DecodedImage image = kdray::read_image(out / "ke.exr");
+            REQUIRE(image.values.size() == 8u * 6u * std::size_t(image.channels));
+            for (std::size_t i = 0; i < image.values.size(); ++i) {
+                const float v = image.values[i];
+                CAPTURE(i);
+                CHECK(std::isfinite(v));
+                if (std::string(ke) == "3e38")
+                    CHECK(v >= 3.40282346e38f / 16);
+                else
+                    CHECK(v == 0.25f);
+            }
         }
     }
     fs::remove_all(dir);
