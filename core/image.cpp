@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -106,7 +107,9 @@ std::string encode_image(const fs::path& path, const Image& image, float exposur
             std::vector<std::uint32_t>& words = exr.channels[c].words;
             words.resize(pixels);
             for (std::size_t i = 0; i < pixels; ++i) {
-                const float v = scale * image.rgb[3 * i + c];
+                // The renderers' radiance is finite (kd_render.h); an exposure must not
+                // multiply it past the largest float either.
+                const float v = std::min(scale * image.rgb[3 * i + c], FLT_MAX);
                 std::memcpy(&words[i], &v, 4);
             }
         }

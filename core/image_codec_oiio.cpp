@@ -1,13 +1,16 @@
 // image_codec_oiio.cpp — core/image_codec.h through OpenImageIO (KDRAY_IMAGE_CODEC=oiio, the
-// default): every format OpenImageIO reads is a texture kdray can load.
+// default): every format OpenImageIO reads is a texture kdray can load. Files are read as every
+// input is (core/input_file.h) and decoded from memory.
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <cstring>
 #include <functional>
+#include <memory>
 
 #include "core/error.h"
 #include "core/image_codec.h"
+#include "core/input_file.h"
 
 namespace kdray {
 namespace {
@@ -32,6 +35,34 @@ std::string encode(const std::string& name, const OIIO::ImageSpec& spec,
     }
     return std::string(reinterpret_cast<const char*>(encoded.data()), encoded.size());
 }
+
+/// An image file opened for decoding, its header read and its declared size checked
+/// (check_image_size) before a pixel is decoded. Its bytes were read as every input is: a FIFO,
+/// a device or a file past the size budget is an Error naming it, where OpenImageIO blocked on a
+/// FIFO and read /dev/zero or a sparse terabyte for ever.
+struct OpenedImage {
+    std::string bytes;
+    std::unique_ptr<OIIO::Filesystem::IOMemReader> memory;
+    std::unique_ptr<OIIO::ImageInput> in;  // declared last: closed before `memory` goes
+
+    explicit OpenedImage(const std::filesystem::path& path) {
+        const std::string name = path.string();
+        bytes = read_input_file(path, "image file");
+        memory = std::make_unique<OIIO::Filesystem::IOMemReader>(bytes.data(), bytes.size());
+        in = OIIO::ImageInput::open(name, nullptr, memory.get());
+        if (!in) {
+            std::string why = OIIO::geterror();
+            // A few rare formats (SGI, ICO, FITS, ...) read only from a path; the path was just
+            // checked to be a regular file of bounded size.
+            const auto probe = OIIO::ImageInput::create(name);
+            if (probe && !probe->supports("ioproxy")) in = OIIO::ImageInput::open(name);
+            if (!in)
+                throw Error("cannot read " + name + ": " + (why.empty() ? OIIO::geterror() : why));
+        }
+        const OIIO::ImageSpec& spec = in->spec();
+        check_image_size(name, spec.width, spec.height, spec.nchannels);
+    }
+};
 
 }  // namespace
 
@@ -80,8 +111,8 @@ std::string encode_exr(const ExrImage& image) {
 }
 
 ExrImage read_exr(const std::filesystem::path& path) {
-    auto in = OIIO::ImageInput::open(path.string());
-    if (!in) throw Error("cannot read " + path.string() + ": " + OIIO::geterror());
+    const OpenedImage opened(path);
+    OIIO::ImageInput* in = opened.in.get();
     const OIIO::ImageSpec& spec = in->spec();
     if (std::string(in->format_name()) != "openexr")
         throw Error("cannot read " + path.string() + ": not an OpenEXR file");
@@ -105,11 +136,9 @@ ExrImage read_exr(const std::filesystem::path& path) {
 }
 
 DecodedImage read_image(const std::filesystem::path& path) {
-    auto in = OIIO::ImageInput::open(path.string());
-    if (!in) throw Error("cannot read " + path.string() + ": " + OIIO::geterror());
+    const OpenedImage opened(path);
+    OIIO::ImageInput* in = opened.in.get();
     const OIIO::ImageSpec spec = in->spec();
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
-        throw Error("cannot read " + path.string() + ": an empty image");
     DecodedImage result;
     result.width = spec.width;
     result.height = spec.height;

@@ -2,6 +2,8 @@
 // stb_image for textures) and tinyexr (EXR), KDRAY_IMAGE_CODEC=small: a dependency closure of a
 // few MiB (zlib) against OpenImageIO's hundreds (boost, ffmpeg, OpenCV, ...), for the device
 // bundle (scripts/device-bundle.sh). Textures: PNG, JPEG, BMP, TGA, GIF, PSD, HDR, PNM and EXR.
+// Files are read as every input is (core/input_file.h) and decoded from memory, their declared
+// size checked (check_image_size) before a pixel is decoded.
 #include <stb_image.h>
 #include <stb_image_write.h>
 #include <tinyexr.h>
@@ -9,11 +11,13 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <numeric>
 
 #include "core/error.h"
 #include "core/image_codec.h"
+#include "core/input_file.h"
 
 namespace kdray {
 namespace {
@@ -42,6 +46,51 @@ struct ParsedExr {
     ParsedExr(const ParsedExr&) = delete;
     ParsedExr& operator=(const ParsedExr&) = delete;
 };
+
+/// The bytes of `bytes` as the unsigned bytes the decoders take.
+const unsigned char* data_of(const std::string& bytes) {
+    return reinterpret_cast<const unsigned char*>(bytes.data());
+}
+
+/// The EXR image in `bytes` (the file `name`), every channel as 32-bit words.
+ExrImage decode_exr(const std::string& name, const std::string& bytes) {
+    auto fail = [&](const std::string& why) { throw Error("cannot read " + name + ": " + why); };
+    EXRVersion version;
+    if (ParseEXRVersionFromMemory(&version, data_of(bytes), bytes.size()) != TINYEXR_SUCCESS)
+        fail("not an OpenEXR file");
+    if (version.multipart || version.non_image) fail("a multi-part or deep EXR file");
+    ParsedExr exr;
+    const char* err = nullptr;
+    if (ParseEXRHeaderFromMemory(&exr.header, &version, data_of(bytes), bytes.size(), &err) !=
+        TINYEXR_SUCCESS)
+        fail(take_exr_error(err, "a bad EXR header"));
+    exr.header_parsed = true;
+    if (exr.header.tiled) fail("a tiled EXR file (kdray reads scanline files)");
+    const EXRBox2i& window = exr.header.data_window;
+    check_image_size(name, std::int64_t(window.max_x) - window.min_x + 1,
+                     std::int64_t(window.max_y) - window.min_y + 1, exr.header.num_channels);
+    for (int c = 0; c < exr.header.num_channels; ++c)
+        if (exr.header.pixel_types[c] == TINYEXR_PIXELTYPE_HALF)
+            exr.header.requested_pixel_types[c] = TINYEXR_PIXELTYPE_FLOAT;
+    if (LoadEXRImageFromMemory(&exr.image, &exr.header, data_of(bytes), bytes.size(), &err) !=
+        TINYEXR_SUCCESS)
+        fail(take_exr_error(err, "bad EXR data"));
+    exr.image_loaded = true;
+
+    ExrImage result;
+    result.width = exr.image.width;
+    result.height = exr.image.height;
+    const std::size_t pixels = std::size_t(result.width) * std::size_t(result.height);
+    for (int c = 0; c < exr.header.num_channels; ++c) {
+        ExrChannel channel;
+        channel.name = exr.header.channels[c].name;
+        channel.is_uint = exr.header.requested_pixel_types[c] == TINYEXR_PIXELTYPE_UINT;
+        channel.words.resize(pixels);
+        std::memcpy(channel.words.data(), exr.image.images[c], 4 * pixels);
+        result.channels.push_back(std::move(channel));
+    }
+    return result;
+}
 
 }  // namespace
 
@@ -110,45 +159,16 @@ std::string encode_exr(const ExrImage& image) {
 }
 
 ExrImage read_exr(const std::filesystem::path& path) {
-    const std::string name = path.string();
-    auto fail = [&](const std::string& why) { throw Error("cannot read " + name + ": " + why); };
-    EXRVersion version;
-    if (ParseEXRVersionFromFile(&version, name.c_str()) != TINYEXR_SUCCESS)
-        fail("not an OpenEXR file");
-    if (version.multipart || version.non_image) fail("a multi-part or deep EXR file");
-    ParsedExr exr;
-    const char* err = nullptr;
-    if (ParseEXRHeaderFromFile(&exr.header, &version, name.c_str(), &err) != TINYEXR_SUCCESS)
-        fail(take_exr_error(err, "a bad EXR header"));
-    exr.header_parsed = true;
-    if (exr.header.tiled) fail("a tiled EXR file (kdray reads scanline files)");
-    for (int c = 0; c < exr.header.num_channels; ++c)
-        if (exr.header.pixel_types[c] == TINYEXR_PIXELTYPE_HALF)
-            exr.header.requested_pixel_types[c] = TINYEXR_PIXELTYPE_FLOAT;
-    if (LoadEXRImageFromFile(&exr.image, &exr.header, name.c_str(), &err) != TINYEXR_SUCCESS)
-        fail(take_exr_error(err, "bad EXR data"));
-    exr.image_loaded = true;
-
-    ExrImage result;
-    result.width = exr.image.width;
-    result.height = exr.image.height;
-    const std::size_t pixels = std::size_t(result.width) * std::size_t(result.height);
-    for (int c = 0; c < exr.header.num_channels; ++c) {
-        ExrChannel channel;
-        channel.name = exr.header.channels[c].name;
-        channel.is_uint = exr.header.requested_pixel_types[c] == TINYEXR_PIXELTYPE_UINT;
-        channel.words.resize(pixels);
-        std::memcpy(channel.words.data(), exr.image.images[c], 4 * pixels);
-        result.channels.push_back(std::move(channel));
-    }
-    return result;
+    return decode_exr(path.string(), read_input_file(path, "image file"));
 }
 
 DecodedImage read_image(const std::filesystem::path& path) {
     const std::string name = path.string();
+    const std::string bytes = read_input_file(path, "image file");
     DecodedImage result;
-    if (IsEXR(name.c_str()) == TINYEXR_SUCCESS) {
-        const ExrImage exr = read_exr(path);
+    if (EXRVersion version;
+        ParseEXRVersionFromMemory(&version, data_of(bytes), bytes.size()) == TINYEXR_SUCCESS) {
+        const ExrImage exr = decode_exr(name, bytes);
         // R, G, B and A first, as OpenImageIO orders them; then the rest in name order.
         std::vector<const ExrChannel*> picked;
         for (const char* first : {"R", "G", "B", "A"})
@@ -173,18 +193,30 @@ DecodedImage read_image(const std::filesystem::path& path) {
         return result;
     }
 
+    // stb_image takes an int length.
+    if (bytes.size() > std::size_t(std::numeric_limits<int>::max()))
+        throw Error("cannot read " + name + ": " + std::to_string(bytes.size()) +
+                    " bytes, more than stb_image reads");
+    const unsigned char* const in = data_of(bytes);
+    const int length = int(bytes.size());
+    int width = 0, height = 0, channels = 0;
+    // The header's size, checked before stb_image allocates it; what it cannot size it cannot
+    // decode either.
+    if (!stbi_info_from_memory(in, length, &width, &height, &channels))
+        throw Error("cannot read " + name + ": " +
+                    (stbi_failure_reason() ? stbi_failure_reason() : "stb_image failed"));
+    check_image_size(name, width, height, channels);
     // stbi_loadf would apply a gamma to 8-bit data: integer images are read as integers and
     // normalised here, float (Radiance HDR) images as floats.
-    int width = 0, height = 0, channels = 0;
     std::unique_ptr<void, void (*)(void*)> data(nullptr, stbi_image_free);
-    const bool hdr = stbi_is_hdr(name.c_str());
-    const bool sixteen = !hdr && stbi_is_16_bit(name.c_str());
+    const bool hdr = stbi_is_hdr_from_memory(in, length);
+    const bool sixteen = !hdr && stbi_is_16_bit_from_memory(in, length);
     if (hdr)
-        data.reset(stbi_loadf(name.c_str(), &width, &height, &channels, 0));
+        data.reset(stbi_loadf_from_memory(in, length, &width, &height, &channels, 0));
     else if (sixteen)
-        data.reset(stbi_load_16(name.c_str(), &width, &height, &channels, 0));
+        data.reset(stbi_load_16_from_memory(in, length, &width, &height, &channels, 0));
     else
-        data.reset(stbi_load(name.c_str(), &width, &height, &channels, 0));
+        data.reset(stbi_load_from_memory(in, length, &width, &height, &channels, 0));
     result.integer = !hdr;
     if (!data || width <= 0 || height <= 0 || channels <= 0)
         throw Error("cannot read " + name + ": " +

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <limits>
 
 #include <nlohmann/json.hpp>
 
@@ -89,6 +90,28 @@ std::string read_input_file(const std::filesystem::path& path, std::string_view 
     }
     text.resize(done);
     return text;
+}
+
+void check_image_size(const std::string& name, std::int64_t width, std::int64_t height,
+                      std::int64_t channels) {
+    const std::string size = std::to_string(width) + " x " + std::to_string(height) + " pixels, " +
+                             std::to_string(channels) + " channels";
+    if (width <= 0 || height <= 0 || channels <= 0)
+        throw Error(name + ": an empty image (" + size + ")");
+    // Bounding each factor first keeps the products within 64 bits.
+    const bool huge =
+        std::uint64_t(width) > kMaxImagePixels || std::uint64_t(height) > kMaxImagePixels;
+    const std::uint64_t pixels = huge ? 0 : std::uint64_t(width) * std::uint64_t(height);
+    if (huge || pixels > kMaxImagePixels)
+        throw Error(name + ": an image of " + size + ", more than the " +
+                    std::to_string(kMaxImagePixels) + " pixels kdray decodes of one image");
+    const std::uint64_t bytes = std::uint64_t(channels) > kMaxImagePixels
+                                    ? std::numeric_limits<std::uint64_t>::max()
+                                    : pixels * std::uint64_t(channels) * 4;
+    if (const std::uint64_t limit = input_size_limit(); bytes > limit)
+        throw Error(name + ": an image of " + size + " takes " + std::to_string(bytes >> 20) +
+                    " MiB decoded, more than the " + std::to_string(limit >> 20) +
+                    " MiB kdray reads of one input here");
 }
 
 nlohmann::json parse_json(std::string_view text, const std::string& name) {

@@ -1,7 +1,8 @@
 // input_file.h — how kdray reads every file a user names as input (OBJ and MTL files, render
-// files, tree files, stats.json): only a regular file is read, its size is checked before the
-// read, nothing can block (a FIFO) or grow without bound (/dev/zero, a link to it), and JSON is
-// parsed to a bounded depth. Errors name the file and the problem.
+// files, tree files, stats.json, textures and images to compare): only a regular file is read, its
+// size is checked before the read, nothing can block (a FIFO) or grow without bound (/dev/zero, a
+// link to it), an image's declared size is checked before it is decoded, and JSON is parsed to a
+// bounded depth. Errors name the file and the problem.
 #pragma once
 
 #include <cstdint>
@@ -28,6 +29,19 @@ std::uint64_t input_size_limit();
 /// bytes kdray reads of one WHAT here" when it exceeds max_bytes.
 std::string read_input_file(const std::filesystem::path& path, std::string_view what,
                             std::uint64_t max_bytes = input_size_limit());
+
+/// The most pixels kdray decodes of one image (a texture, an image to compare): 16384 x 16384,
+/// the largest texture in common use. An image's header declares its size in a few bytes and the
+/// decoder allocates it before reading any pixel, so that a 68-byte PNG declaring 60000 x 60000
+/// cost 58 GB ("out of host memory", naming no file).
+inline constexpr std::uint64_t kMaxImagePixels = std::uint64_t(1) << 28;
+
+/// Throws Error "NAME: an image of W x H pixels and C channels, more than ..." unless the image
+/// declares at most kMaxImagePixels pixels and its decoded floats (4 bytes a channel) fit in
+/// input_size_limit(); "NAME: an empty image (W x H, C channels)" when a dimension is not
+/// positive. Called with the header's figures, before anything is decoded.
+void check_image_size(const std::string& name, std::int64_t width, std::int64_t height,
+                      std::int64_t channels);
 
 /// The deepest nesting of arrays and objects kdray parses: kdray's own files nest 5 deep, and
 /// every consumer of a parsed value (dump(), destruction, a message quoting it) recurses once a

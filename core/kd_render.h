@@ -38,6 +38,11 @@
 #endif
 
 #define KDRAY_PI 3.14159265358979323846f
+/* The largest float (FLT_MAX, spelled out for both compilers). Every sum of radiance saturates
+ * there: Ke 3e38, a valid finite Kd-range value, summed over 16 samples to inf, and a bound on Ke
+ * could not prevent it, since a pixel's radiance also grows with the lights, the emitters'
+ * geometry and the bounces. Below it every sum is bit for bit what it was. */
+#define KDRAY_RADIANCE_MAX 3.40282346638528859812e+38f
 /* A path whose weight falls below this adds nothing visible; it is not followed. */
 #define KDRAY_MIN_PATH_WEIGHT 1e-3f
 
@@ -414,7 +419,8 @@ KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdV
     if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS))
         kd_emitted(scene->triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE, m, primary->dir,
                    emitted);
-    for (int c = 0; c < 3; ++c) rgb[c] = 0.0f + (emitted[c] + surface * direct[c]);
+    for (int c = 0; c < 3; ++c)
+        rgb[c] = KDRAY_FMIN(0.0f + (emitted[c] + surface * direct[c]), KDRAY_RADIANCE_MAX);
 }
 
 /* Traces one sample's ray tree from the primary ray and returns its colour. The primary ray's
@@ -460,7 +466,8 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
             kd_set3(first_normal, ng[0], ng[1], ng[2]);
         }
         if (hit.prim == KDRAY_NO_HIT) {
-            for (int c = 0; c < 3; ++c) rgb[c] += r.weight[c] * view->background[c];
+            for (int c = 0; c < 3; ++c)
+                rgb[c] = KDRAY_FMIN(rgb[c] + r.weight[c] * view->background[c], KDRAY_RADIANCE_MAX);
             continue;
         }
 
@@ -475,7 +482,9 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
                             direct, rays);
         kd_f32 emitted[3] = {0.0f, 0.0f, 0.0f};
         if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS)) kd_emitted(tri, m, r.ray.dir, emitted);
-        for (int c = 0; c < 3; ++c) rgb[c] += r.weight[c] * (emitted[c] + surface * direct[c]);
+        for (int c = 0; c < 3; ++c)
+            rgb[c] = KDRAY_FMIN(rgb[c] + r.weight[c] * (emitted[c] + surface * direct[c]),
+                                KDRAY_RADIANCE_MAX);
         if (r.depth >= view->max_depth) continue;
 
         /* Secondary rays: the mirror, and the dielectric's Fresnel-weighted pair. */
@@ -600,7 +609,8 @@ KDRAY_HOT_INLINE void kd_render_pixel(const KdSceneView* scene, const KdView* vi
                 out.centre_hit = hit;
                 kd_set3(out.normal, 0.0f, 0.0f, 0.0f);
             }
-            for (int c = 0; c < 3; ++c) out.rgb[c] += view->background[c];
+            for (int c = 0; c < 3; ++c)
+                out.rgb[c] = KDRAY_FMIN(out.rgb[c] + view->background[c], KDRAY_RADIANCE_MAX);
             continue;
         }
         KdRay primary;
@@ -608,7 +618,8 @@ KDRAY_HOT_INLINE void kd_render_pixel(const KdSceneView* scene, const KdView* vi
         kd_trace_sample(scene, view, &primary, traced ? &hit : 0,
                         occluded ? occluded + s * traced_stride : 0, rgb, &out.rays,
                         view->spp == 1u ? &out.centre_hit : 0, out.normal);
-        for (int c = 0; c < 3; ++c) out.rgb[c] += rgb[c];
+        for (int c = 0; c < 3; ++c)
+            out.rgb[c] = KDRAY_FMIN(out.rgb[c] + rgb[c], KDRAY_RADIANCE_MAX);
     }
     for (int c = 0; c < 3; ++c) out.rgb[c] /= (kd_f32)view->spp;
     *pixel = out;

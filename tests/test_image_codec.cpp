@@ -7,6 +7,7 @@
 #include <doctest/doctest.h>
 
 #include <OpenImageIO/imageio.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -20,6 +21,7 @@
 
 #include "core/error.h"
 #include "core/image_codec.h"
+#include "tests/hostile_png.h"
 
 namespace {
 
@@ -196,4 +198,53 @@ TEST_CASE("files that are not images are errors that name them") {
     CHECK_THROWS_WITH_AS(read_image(path), doctest::Contains(name.c_str()), Error);
     CHECK_THROWS_WITH_AS(read_exr(path), doctest::Contains(name.c_str()), Error);
     CHECK_THROWS_AS(read_image(temp_file("missing.png")), Error);
+}
+
+TEST_CASE("an image's declared size and its file are checked before anything is decoded") {
+    // A 68-byte PNG whose header declares 60000 x 60000 made OpenImageIO allocate 43 GB before
+    // reading a pixel: "out of host memory", naming no file. stb_image refuses past 2^30 bytes
+    // itself; 17000 x 17000 (289 M pixels, 867 MB) is past kdray's 2^28 pixels but not stb's.
+    for (const std::uint32_t side : {60000u, 17000u}) {
+        CAPTURE(side);
+        const fs::path huge = temp_file("huge.png");
+        write_bytes(huge, test::png_declaring(side, side));
+        REQUIRE(fs::file_size(huge) == 68u);
+        CHECK_THROWS_WITH_AS(read_image(huge), doctest::Contains(huge.string().c_str()), Error);
+        if (side == 17000u || std::string(image_codec_name()) == "oiio")
+            CHECK_THROWS_WITH_AS(read_image(huge), doctest::Contains("pixels, 3 channels, more"),
+                                 Error);
+    }
+    // A 2 x 2 declaration gets as far as the cut-off pixel data.
+    const fs::path small = temp_file("small.png");
+    write_bytes(small, test::png_declaring(2, 2));
+    try {
+        read_image(small);
+        FAIL("a PNG without its pixel data was read");
+    } catch (const Error& e) {
+        CHECK(std::string(e.what()).find("channels, more") == std::string::npos);
+    }
+
+    // An EXR whose dataWindow says 60000 x 60000: the encoded 7 x 5 AOV, its box patched.
+    // OpenEXR refuses it at its offset table; tinyexr would allocate it.
+    std::string exr = encode_exr(nasty_aov());
+    const std::string attribute("dataWindow\0box2i\0", 17);
+    const std::size_t at = exr.find(attribute);
+    REQUIRE(at != std::string::npos);
+    const std::int32_t box[4] = {0, 0, 59999, 59999};
+    std::memcpy(&exr[at + attribute.size() + 4], box, 16);
+    const fs::path huge_exr = temp_file("huge.exr");
+    write_bytes(huge_exr, exr);
+    CHECK_THROWS_WITH_AS(read_exr(huge_exr), doctest::Contains(huge_exr.string().c_str()), Error);
+    CHECK_THROWS_WITH_AS(read_image(huge_exr), doctest::Contains(huge_exr.string().c_str()), Error);
+    if (std::string(image_codec_name()) == "small")
+        CHECK_THROWS_WITH_AS(read_exr(huge_exr), doctest::Contains("60000 x 60000 pixels"), Error);
+
+    // Only a regular file is read: a FIFO blocked the decoders for ever, /dev/zero never ended.
+    const fs::path fifo = temp_file("fifo.png");
+    fs::remove(fifo);
+    REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+    CHECK_THROWS_WITH_AS(read_image(fifo), doctest::Contains("not a regular file (a FIFO)"), Error);
+    CHECK_THROWS_WITH_AS(read_exr(fifo), doctest::Contains("not a regular file (a FIFO)"), Error);
+    CHECK_THROWS_WITH_AS(read_image("/dev/zero"), doctest::Contains("/dev/zero"), Error);
+    fs::remove(fifo);
 }
