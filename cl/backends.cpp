@@ -1,10 +1,10 @@
 #include "cl/backends.h"
 
-#include "cl/build/opencl_tree_builder.h"
-#include "cl/render/opencl_tracer.h"
+#include "cl/builder/opencl_tree_builder.h"
+#include "cl/renderer/opencl_tracer.h"
 #include "core/error.h"
-#include "core/reference_builder.h"
-#include "core/reference_tracer.h"
+#include "core/render/reference_tracer.h"
+#include "core/tree/reference_builder.h"
 
 namespace kdray {
 

@@ -8,9 +8,9 @@
 #include <string>
 
 #include "cl/runtime/device_session.h"
-#include "core/kd_tree.h"
-#include "core/tracer.h"
-#include "core/tree_builder.h"
+#include "core/render/tracer.h"
+#include "core/tree/tree.h"
+#include "core/tree/tree_builder.h"
 
 namespace kdray {
 

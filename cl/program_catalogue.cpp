@@ -2,11 +2,11 @@
 
 #include <set>
 
-#include "cl/build/build_context.h"
-#include "cl/render/opencl_renderer.h"
+#include "cl/builder/build_context.h"
+#include "cl/renderer/opencl_renderer.h"
 #include "cl/runtime/program_cache.h"
-#include "core/build_quality.h"
-#include "core/kd_intersect_moller.h"
+#include "core/device/kd_intersect_moller.h"
+#include "core/tree/build_quality.h"
 
 namespace kdray {
 

@@ -8,10 +8,10 @@
 #include "cl/runtime/program_cache.h"
 #include "cli/commands.h"
 #include "cli/report.h"
-#include "core/frame_pipeline.h"
-#include "core/scene.h"
-#include "core/stats_json.h"
-#include "core/tree_file.h"
+#include "core/run/frame_pipeline.h"
+#include "core/run/stats_json.h"
+#include "core/scene/scene.h"
+#include "core/tree/tree_file.h"
 
 namespace kdray::cli {
 

@@ -7,9 +7,9 @@
 
 #include "cli/commands.h"
 #include "core/error.h"
-#include "core/image.h"
-#include "core/image_codec.h"
-#include "core/image_compare.h"
+#include "core/io/image.h"
+#include "core/io/image_codec.h"
+#include "core/io/image_compare.h"
 
 namespace kdray::cli {
 namespace {

@@ -1,6 +1,6 @@
 // `kdray render FRAME.obj... -o OUTDIR`: the command line turned into a render run
-// (core/render_run.h: per frame, load, build, trace and write the image and the hit AOV, then the
-// run merged into OUTDIR/stats.json), with the builder and the tracer it names (cl/backends.h);
+// (core/run/render_run.h: per frame, load, build, trace and write the image and the hit AOV, then
+// the run merged into OUTDIR/stats.json), with the builder and the tracer it names (cl/backends.h);
 // the run's messages and progress line on stderr, Ctrl-C, and the exit status.
 #include <algorithm>
 #include <cctype>
@@ -20,10 +20,10 @@
 #include "cli/inputs.h"
 #include "cli/log.h"
 #include "core/error.h"
-#include "core/frame_pipeline.h"
-#include "core/render_file.h"
-#include "core/render_run.h"
-#include "core/render_setup.h"
+#include "core/render/render_file.h"
+#include "core/render/render_setup.h"
+#include "core/run/frame_pipeline.h"
+#include "core/run/render_run.h"
 
 namespace kdray::cli {
 namespace {

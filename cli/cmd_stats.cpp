@@ -11,12 +11,12 @@
 #include "cli/devices.h"
 #include "cli/report.h"
 #include "core/error.h"
-#include "core/input_file.h"
-#include "core/render_stats.h"
-#include "core/scene.h"
-#include "core/stats_json.h"
-#include "core/tree_file.h"
-#include "core/tree_stats.h"
+#include "core/io/input_file.h"
+#include "core/run/render_stats.h"
+#include "core/run/stats_json.h"
+#include "core/scene/scene.h"
+#include "core/tree/tree_file.h"
+#include "core/tree/tree_stats.h"
 
 namespace kdray::cli {
 namespace {

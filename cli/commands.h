@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "core/build_quality.h"
-#include "core/kd_tree.h"
+#include "core/tree/build_quality.h"
+#include "core/tree/tree.h"
 
 namespace kdray::cli {
 
@@ -46,7 +46,7 @@ struct RenderCommand {
     bool aov = false;
     bool heatmap = false;  // <stem>.cost.png: the centre rays' walk cost in false colour
     std::string format = "png";
-    std::string name = "{stem}";  // a frame's file names (core/output_name.h)
+    std::string name = "{stem}";  // a frame's file names (core/io/output_name.h)
     bool skip_existing = false;   // render only the frames whose files are missing
     std::string tracer = "opencl";
     int threads = 0;

@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "core/error.h"
-#include "core/natural_order.h"
+#include "core/io/natural_order.h"
 
 namespace kdray::cli {
 

@@ -23,7 +23,7 @@
 #include "cli/commands.h"
 #include "cli/log.h"
 #include "core/error.h"
-#include "core/image_codec.h"
+#include "core/io/image_codec.h"
 #include "core/version.h"
 
 namespace {

@@ -1,5 +1,5 @@
-// report.h — a readable table made from one of kdray's JSON reports (core/stats_json.h): a tree,
-// a scene, a render folder, the devices.
+// report.h — a readable table made from one of kdray's JSON reports (core/run/stats_json.h): a
+// tree, a scene, a render folder, the devices.
 #pragma once
 
 #include <iosfwd>

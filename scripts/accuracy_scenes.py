@@ -15,7 +15,7 @@ square image of odd width W, so that pixel x's centre ray points along ((2x + 1 
 Each has a copy 1e5 from the origin (scaled up 100 times, so that its triangles stay far larger
 than a float's spacing there), where rounding in the ray's frame is larger.
 
-write_device_scenes adds two cases that only the scene frame (core/scene_frame.h) and the refined
+write_device_scenes adds two cases that only the scene frame (core/scene/scene_frame.h) and the refined
 distance make right, for the device check (scripts/device-check-cases.txt):
 - sphere-inside-at-1e9: the sphere, scaled up 100 times, 1e9 from the origin, written with 17
   digits: read in float its corners would round to a spacing of 64.

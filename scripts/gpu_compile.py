@@ -41,7 +41,7 @@ PRIVATE_BUDGET = 4096
 LOCAL_BUDGET = 32768
 # Kernels a GPU runs only when asked for, with their own budget: the small stage's
 # subtree-per-work-item shape (CPU devices' default; on a GPU only with --small-stage per-root,
-# cl/build/opencl_builder.cpp) keeps a whole subtree's build state per work-item.
+# cl/builder/opencl_builder.cpp) keeps a whole subtree's build state per work-item.
 PRIVATE_BUDGET_OF = {"kd_build_small_subtrees": 12288}
 
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""docs/render-file.schema.json against kdray's own render-file reader (core/render_file.cpp).
+"""docs/render-file.schema.json against kdray's own render-file reader (core/render/render_file.cpp).
 
 1. Every render file of testdata/ and of ../shared/scenes (that part skipped, saying so, when
    ../shared is absent) is valid under the schema.

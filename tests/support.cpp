@@ -14,10 +14,10 @@
 
 #include <doctest/doctest.h>
 
-#include "core/kd_render.h"
-#include "core/kd_traverse.h"
-#include "core/math.h"
-#include "core/tree_check.h"
+#include "core/device/kd_render.h"
+#include "core/device/kd_traverse.h"
+#include "core/geometry/math.h"
+#include "core/tree/tree_check.h"
 
 namespace kdray::test {
 namespace {

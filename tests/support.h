@@ -11,12 +11,12 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/image.h"
-#include "core/kd_shared.h"
-#include "core/kd_tree.h"
-#include "core/math.h"
-#include "core/render_file.h"
-#include "core/scene.h"
+#include "core/device/kd_shared.h"
+#include "core/geometry/math.h"
+#include "core/io/image.h"
+#include "core/render/render_file.h"
+#include "core/scene/scene.h"
+#include "core/tree/tree.h"
 
 namespace kdray::test {
 
@@ -56,7 +56,7 @@ Scene with_zero_area(int count, std::uint32_t seed);
 std::string spheres_obj(double scale, double offset, int rings = 24);
 
 /// spheres_obj's scene loaded from a file by load_obj, so through the scene frame
-/// (core/scene_frame.h): its triangles lie near the origin at about unit extent.
+/// (core/scene/scene_frame.h): its triangles lie near the origin at about unit extent.
 Scene load_spheres(double scale, double offset, int rings);
 
 /// The hard scenes above by name, with the far (offset 1e5) and tiny (extent 1e-4) random scenes,

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "core/camera.h"
+#include "core/render/camera.h"
 
 using namespace kdray;
 

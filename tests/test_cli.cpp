@@ -14,17 +14,17 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/build_quality.h"
-#include "core/camera.h"
-#include "core/image.h"
-#include "core/image_codec.h"
-#include "core/kd_render.h"
-#include "core/natural_order.h"
-#include "core/reference_builder.h"
-#include "core/render_setup.h"
-#include "core/tree_check.h"
-#include "core/tree_file.h"
-#include "core/tree_stats.h"
+#include "core/device/kd_render.h"
+#include "core/io/image.h"
+#include "core/io/image_codec.h"
+#include "core/io/natural_order.h"
+#include "core/render/camera.h"
+#include "core/render/render_setup.h"
+#include "core/tree/build_quality.h"
+#include "core/tree/reference_builder.h"
+#include "core/tree/tree_check.h"
+#include "core/tree/tree_file.h"
+#include "core/tree/tree_stats.h"
 #include "tests/support.h"
 
 namespace fs = std::filesystem;

@@ -26,8 +26,8 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
-#include "core/output_name.h"
-#include "core/render_stats.h"
+#include "core/io/output_name.h"
+#include "core/run/render_stats.h"
 #include "tests/support.h"
 
 namespace fs = std::filesystem;

@@ -14,15 +14,15 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/camera.h"
-#include "core/image.h"
-#include "core/kd_render.h"
-#include "core/render_file.h"
-#include "core/render_setup.h"
-#include "core/scene.h"
-#include "core/tree_check.h"
-#include "core/tree_file.h"
-#include "core/tree_stats.h"
+#include "core/device/kd_render.h"
+#include "core/io/image.h"
+#include "core/render/camera.h"
+#include "core/render/render_file.h"
+#include "core/render/render_setup.h"
+#include "core/scene/scene.h"
+#include "core/tree/tree_check.h"
+#include "core/tree/tree_file.h"
+#include "core/tree/tree_stats.h"
 #include "tests/support.h"
 
 namespace fs = std::filesystem;

@@ -1,6 +1,7 @@
 // The shared pieces of core/ that the structure change made one: the polygon clipping of
-// core/kd_clip.h (host and device alike) against closed forms, and the one atomic file writer of
-// core/atomic_file.h (a failed write leaves neither the file nor its temporary behind).
+// core/device/kd_clip.h (host and device alike) against closed forms, and the one atomic file
+// writer of core/io/atomic_file.h (a failed write leaves neither the file nor its temporary
+// behind).
 #include <doctest/doctest.h>
 
 #include <filesystem>
@@ -8,11 +9,11 @@
 #include <iterator>
 #include <string>
 
-#include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/io/atomic_file.h"
 
 #define KDRAY_CLIP_REAL double
-#include "core/kd_clip.h"
+#include "core/device/kd_clip.h"
 #include "tests/support.h"
 
 namespace kdray {

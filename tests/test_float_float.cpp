@@ -1,10 +1,10 @@
 // test_float_float.cpp — the float-float arithmetic that devices without fp64 use for the
-// triangle test's exact steps (core/kd_float_float.h, kd_traverse.h's *_ff functions), against
-// long double (x86's 64-bit significand holds every exact value checked here) and closed forms:
-// the error-free transformations are exact, the sum, product and quotient within their published
-// bounds (against GCC's __float128, whose 113 bits hold those operands' exact sums), a b - c d
-// correctly rounded and exact in sign on cancelling inputs, and the refined distance within an ulp
-// of the exact one, as the double path is.
+// triangle test's exact steps (core/device/kd_float_float.h, kd_traverse.h's *_ff functions),
+// against long double (x86's 64-bit significand holds every exact value checked here) and closed
+// forms: the error-free transformations are exact, the sum, product and quotient within their
+// published bounds (against GCC's __float128, whose 113 bits hold those operands' exact sums), a b
+// - c d correctly rounded and exact in sign on cancelling inputs, and the refined distance within
+// an ulp of the exact one, as the double path is.
 #include <doctest/doctest.h>
 
 #include <cfloat>
@@ -13,7 +13,7 @@
 #include <random>
 #include <vector>
 
-#include "core/kd_traverse.h"
+#include "core/device/kd_traverse.h"
 
 namespace {
 

@@ -2,7 +2,7 @@
 // the builder and tracer a name asks for; the OpenCL tracer keeps one plan per combination and
 // traces the OpenCL builder's device-resident tree to the hits of the host tree; a frame rendered
 // for the warm-up (Output::Discard) is the frame the run renders, only unwritten; a render run
-// driven through the library (core/render_run.h) renders, reports and records its frames as
+// driven through the library (core/run/render_run.h) renders, reports and records its frames as
 // render_frame renders each on its own.
 #include <doctest/doctest.h>
 
@@ -13,18 +13,18 @@
 #include <vector>
 
 #include "cl/backends.h"
-#include "cl/build/opencl_tree_builder.h"
-#include "cl/render/opencl_tracer.h"
+#include "cl/builder/opencl_tree_builder.h"
+#include "cl/renderer/opencl_tracer.h"
 #include "cl/runtime/program_cache.h"
-#include "core/camera.h"
 #include "core/error.h"
-#include "core/frame_pipeline.h"
-#include "core/reference_builder.h"
-#include "core/reference_tracer.h"
-#include "core/render_run.h"
-#include "core/render_setup.h"
-#include "core/render_stats.h"
-#include "core/stats_json.h"
+#include "core/render/camera.h"
+#include "core/render/reference_tracer.h"
+#include "core/render/render_setup.h"
+#include "core/run/frame_pipeline.h"
+#include "core/run/render_run.h"
+#include "core/run/render_stats.h"
+#include "core/run/stats_json.h"
+#include "core/tree/reference_builder.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
 

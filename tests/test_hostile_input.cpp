@@ -18,10 +18,10 @@
 #include <string>
 #include <vector>
 
-#include "core/atomic_file.h"
-#include "core/image_codec.h"
-#include "core/kd_shared.h"
-#include "core/tree_file.h"
+#include "core/device/kd_shared.h"
+#include "core/io/atomic_file.h"
+#include "core/io/image_codec.h"
+#include "core/tree/tree_file.h"
 #include "tests/support.h"
 
 namespace fs = std::filesystem;

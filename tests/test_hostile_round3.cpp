@@ -15,9 +15,9 @@
 #include <string>
 #include <vector>
 
-#include "core/atomic_file.h"
-#include "core/image.h"
-#include "core/image_codec.h"
+#include "core/io/atomic_file.h"
+#include "core/io/image.h"
+#include "core/io/image_codec.h"
 #include "tests/support.h"
 
 namespace fs = std::filesystem;

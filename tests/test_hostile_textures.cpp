@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "core/image.h"
-#include "core/image_codec.h"
-#include "core/input_file.h"
+#include "core/io/image.h"
+#include "core/io/image_codec.h"
+#include "core/io/input_file.h"
 #include "tests/hostile_png.h"
 #include "tests/support.h"
 

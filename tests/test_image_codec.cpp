@@ -1,4 +1,4 @@
-// The image codec (core/image_codec.h), compiled once for each implementation: in kdray_tests
+// The image codec (core/io/image_codec.h), compiled once for each implementation: in kdray_tests
 // with the codec kdray links (CTest image_codec), and with image_codec_small.cpp alone in
 // kdray_tests_small_codec (CTest image_codec_small) when libstb-dev and libtinyexr-dev are
 // installed. Every value must survive a round trip bit for bit, including the AOV's +inf and
@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "core/image_codec.h"
+#include "core/io/image_codec.h"
 #include "tests/hostile_png.h"
 
 namespace {

@@ -1,4 +1,4 @@
-// `kdray compare` and core/image_compare.h, what scripts/device-check.sh decides a device's
+// `kdray compare` and core/io/image_compare.h, what scripts/device-check.sh decides a device's
 // correctness by: the agreement of conventions.md counted pixel by pixel (a NaN Z or an image NaN
 // must disagree, never pass), and the exit status a script reads.
 #include <doctest/doctest.h>
@@ -7,8 +7,8 @@
 #include <limits>
 
 #include "core/error.h"
-#include "core/image.h"
-#include "core/image_compare.h"
+#include "core/io/image.h"
+#include "core/io/image_compare.h"
 #include "tests/support.h"
 
 using namespace kdray;

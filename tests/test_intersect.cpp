@@ -1,9 +1,9 @@
-// test_intersect.cpp — the shared ray–triangle test of core/kd_traverse.h (Woop, Benthin, Wald
-// 2013, "Watertight Ray/Triangle Intersection", JCGT 2(1)): rays aimed exactly at the edges and
-// vertices of closed meshes never slip through, degenerate triangles are never hit, and distances
-// and barycentrics match closed forms on a known triangle. The hard cases (edges, vertices,
-// needles) run through both arithmetics of the test's exact steps: double, and the float-float
-// that devices without fp64 use (core/kd_float_float.h).
+// test_intersect.cpp — the shared ray–triangle test of core/device/kd_traverse.h (Woop, Benthin,
+// Wald 2013, "Watertight Ray/Triangle Intersection", JCGT 2(1)): rays aimed exactly at the edges
+// and vertices of closed meshes never slip through, degenerate triangles are never hit, and
+// distances and barycentrics match closed forms on a known triangle. The hard cases (edges,
+// vertices, needles) run through both arithmetics of the test's exact steps: double, and the
+// float-float that devices without fp64 use (core/device/kd_float_float.h).
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "core/kd_traverse.h"
-#include "core/math.h"
-#include "core/scene.h"
+#include "core/device/kd_traverse.h"
+#include "core/geometry/math.h"
+#include "core/scene/scene.h"
 #include "tests/support.h"
 
 namespace kdray {

@@ -1,9 +1,9 @@
-// test_intersect_moller.cpp — the Möller–Trumbore test of core/kd_intersect_moller.h, the fast
-// alternative that `kdray render --intersect moller` selects: it agrees with the watertight test
-// (brute force) on generic rays, through the kd-tree too; on rays aimed at the vertices and edges
-// of a closed mesh around the camera the watertight test never leaks while Möller–Trumbore may
-// (its leaks are counted, not asserted); and the OpenCL tracer gives the reference tracer's hits
-// for either test.
+// test_intersect_moller.cpp — the Möller–Trumbore test of core/device/kd_intersect_moller.h, the
+// fast alternative that `kdray render --intersect moller` selects: it agrees with the watertight
+// test (brute force) on generic rays, through the kd-tree too; on rays aimed at the vertices and
+// edges of a closed mesh around the camera the watertight test never leaks while Möller–Trumbore
+// may (its leaks are counted, not asserted); and the OpenCL tracer gives the reference tracer's
+// hits for either test.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -12,12 +12,12 @@
 #include <string>
 #include <vector>
 
-#include "cl/render/opencl_renderer.h"
-#include "core/kd_render.h"
-#include "core/kd_traverse.h"
-#include "core/reference_builder.h"
-#include "core/reference_tracer.h"
-#include "core/render_setup.h"
+#include "cl/renderer/opencl_renderer.h"
+#include "core/device/kd_render.h"
+#include "core/device/kd_traverse.h"
+#include "core/render/reference_tracer.h"
+#include "core/render/render_setup.h"
+#include "core/tree/reference_builder.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
 

@@ -12,7 +12,7 @@
 #include <string>
 
 #include "core/error.h"
-#include "core/scene.h"
+#include "core/scene/scene.h"
 #include "tests/support.h"
 
 using namespace kdray;

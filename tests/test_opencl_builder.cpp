@@ -14,14 +14,14 @@
 #include <utility>
 #include <vector>
 
-#include "cl/build/opencl_builder.h"
+#include "cl/builder/opencl_builder.h"
 #include "cl/runtime/program_cache.h"
-#include "core/build_quality.h"
+#include "core/device/kd_traverse.h"
 #include "core/error.h"
-#include "core/kd_traverse.h"
-#include "core/reference_builder.h"
-#include "core/tree_check.h"
-#include "core/tree_stats.h"
+#include "core/tree/build_quality.h"
+#include "core/tree/reference_builder.h"
+#include "core/tree/tree_check.h"
+#include "core/tree/tree_stats.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
 

@@ -1,7 +1,7 @@
 // test_opencl_float_float.cpp — the OpenCL tracer on the path a device without fp64 takes (Intel
 // Arc, Xe-LP): KDRAY_FORCE_NO_FP64=1 makes PoCL compile its render programs with no double at
 // all, so the watertight edge fallback and the refined distance run in float-float arithmetic
-// (core/kd_float_float.h). Hits must still equal brute force and the host reference (which
+// (core/device/kd_float_float.h). Hits must still equal brute force and the host reference (which
 // computes in double) on the hard scenes, one ray at a time and in packets; needle distances stay
 // within a few ulps of the exact ones; and a run says which path it took, in its log and in
 // stats.json.
@@ -14,14 +14,14 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cl/render/opencl_renderer.h"
-#include "core/camera.h"
-#include "core/image_codec.h"
-#include "core/kd_render.h"
-#include "core/reference_builder.h"
-#include "core/reference_tracer.h"
-#include "core/render_file.h"
-#include "core/render_setup.h"
+#include "cl/renderer/opencl_renderer.h"
+#include "core/device/kd_render.h"
+#include "core/io/image_codec.h"
+#include "core/render/camera.h"
+#include "core/render/reference_tracer.h"
+#include "core/render/render_file.h"
+#include "core/render/render_setup.h"
+#include "core/tree/reference_builder.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
 

@@ -14,9 +14,9 @@
 #include "cl/runtime/device.h"
 #include "cl/runtime/primitives.h"
 #include "cl/runtime/program_cache.h"
+#include "core/device/kd_build_shared.h"
+#include "core/device/kd_shared.h"
 #include "core/error.h"
-#include "core/kd_build_shared.h"
-#include "core/kd_shared.h"
 #include "tests/test_opencl_fixture.h"
 
 using namespace kdray;

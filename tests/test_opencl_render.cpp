@@ -9,17 +9,17 @@
 #include <string>
 #include <vector>
 
-#include "cl/render/opencl_renderer.h"
-#include "cl/render/opencl_tracer.h"
-#include "cl/render/scene_arrays.h"
+#include "cl/renderer/opencl_renderer.h"
+#include "cl/renderer/opencl_tracer.h"
+#include "cl/renderer/scene_arrays.h"
 #include "cl/runtime/program_cache.h"
-#include "core/camera.h"
+#include "core/device/kd_render.h"
 #include "core/error.h"
-#include "core/kd_render.h"
-#include "core/reference_builder.h"
-#include "core/reference_tracer.h"
-#include "core/render_file.h"
-#include "core/render_setup.h"
+#include "core/render/camera.h"
+#include "core/render/reference_tracer.h"
+#include "core/render/render_file.h"
+#include "core/render/render_setup.h"
+#include "core/tree/reference_builder.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
 

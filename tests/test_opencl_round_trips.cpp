@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "cl/build/opencl_builder.h"
+#include "cl/builder/opencl_builder.h"
 #include "cl/runtime/primitives.h"
-#include "core/tree_check.h"
+#include "core/tree/tree_check.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
 

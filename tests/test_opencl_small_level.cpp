@@ -1,5 +1,5 @@
 // test_opencl_small_level.cpp — the OpenCL builder's small stage in the paper's level-parallel
-// shape (Zhou et al. 2008, §4.2; cl/build/small_levels.cpp) against its per-root shape: the two
+// shape (Zhou et al. 2008, §4.2; cl/builder/small_levels.cpp) against its per-root shape: the two
 // must build the same tree node for node on the scenes where the small stage's rarer paths run
 // (re-clipping, flat faces, planar triangles, the second pass, batches), and each tree must pass
 // the checker and trace as brute force does. A per-level kernel that priced, picked, re-clipped
@@ -11,10 +11,10 @@
 #include <utility>
 #include <vector>
 
-#include "cl/build/opencl_builder.h"
-#include "core/build_quality.h"
-#include "core/scene.h"
-#include "core/tree_stats.h"
+#include "cl/builder/opencl_builder.h"
+#include "core/scene/scene.h"
+#include "core/tree/build_quality.h"
+#include "core/tree/tree_stats.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
 

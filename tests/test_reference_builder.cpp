@@ -10,13 +10,13 @@
 #include <string>
 #include <vector>
 
+#include "core/device/kd_traverse.h"
 #include "core/error.h"
-#include "core/kd_traverse.h"
-#include "core/reference_builder.h"
-#include "core/sah_events.h"
-#include "core/tree_check.h"
-#include "core/tree_stats.h"
-#include "core/triangle_clip.h"
+#include "core/geometry/triangle_clip.h"
+#include "core/tree/reference_builder.h"
+#include "core/tree/sah_events.h"
+#include "core/tree/tree_check.h"
+#include "core/tree/tree_stats.h"
 #include "tests/support.h"
 
 using namespace kdray;

@@ -20,9 +20,9 @@
 #include <vector>
 
 #include "core/error.h"
-#include "core/image.h"
-#include "core/reference_builder.h"
-#include "core/reference_tracer.h"
+#include "core/io/image.h"
+#include "core/render/reference_tracer.h"
+#include "core/tree/reference_builder.h"
 #include "tests/support.h"
 
 namespace kdray {

@@ -10,7 +10,7 @@
 #include <utility>
 
 #include "core/error.h"
-#include "core/render_file.h"
+#include "core/render/render_file.h"
 #include "tests/support.h"
 
 using namespace kdray;

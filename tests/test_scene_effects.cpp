@@ -14,14 +14,14 @@
 #include <string>
 #include <vector>
 
-#include "cl/render/opencl_renderer.h"
-#include "core/frame_pipeline.h"
-#include "core/image.h"
-#include "core/reference_builder.h"
-#include "core/reference_tracer.h"
-#include "core/render_file.h"
-#include "core/render_setup.h"
-#include "core/scene.h"
+#include "cl/renderer/opencl_renderer.h"
+#include "core/io/image.h"
+#include "core/render/reference_tracer.h"
+#include "core/render/render_file.h"
+#include "core/render/render_setup.h"
+#include "core/run/frame_pipeline.h"
+#include "core/scene/scene.h"
+#include "core/tree/reference_builder.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
 

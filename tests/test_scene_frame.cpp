@@ -1,6 +1,6 @@
-// test_scene_frame.cpp — the frame kdray traces in (core/scene_frame.h): a scene loads in double
-// and is traced near the origin at about unit extent, so the same spheres render the same hits
-// and the same image at any scale from 1e-30 to 1e30 and at any distance from the origin up to
+// test_scene_frame.cpp — the frame kdray traces in (core/scene/scene_frame.h): a scene loads in
+// double and is traced near the origin at about unit extent, so the same spheres render the same
+// hits and the same image at any scale from 1e-30 to 1e30 and at any distance from the origin up to
 // 1e9, and what kdray reports (the AOV's Z) is in the scene's own units.
 #include <doctest/doctest.h>
 
@@ -13,13 +13,13 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
-#include "core/image.h"
-#include "core/reference_builder.h"
-#include "core/reference_tracer.h"
-#include "core/render_file.h"
-#include "core/render_setup.h"
-#include "core/scene.h"
-#include "core/scene_frame.h"
+#include "core/io/image.h"
+#include "core/render/reference_tracer.h"
+#include "core/render/render_file.h"
+#include "core/render/render_setup.h"
+#include "core/scene/scene.h"
+#include "core/scene/scene_frame.h"
+#include "core/tree/reference_builder.h"
 #include "tests/support.h"
 
 namespace fs = std::filesystem;

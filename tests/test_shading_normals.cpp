@@ -7,14 +7,14 @@
 #include <cmath>
 #include <vector>
 
-#include "cl/render/opencl_renderer.h"
-#include "core/camera.h"
-#include "core/kd_render.h"
-#include "core/reference_builder.h"
-#include "core/reference_tracer.h"
-#include "core/render_file.h"
-#include "core/render_setup.h"
-#include "core/scene.h"
+#include "cl/renderer/opencl_renderer.h"
+#include "core/device/kd_render.h"
+#include "core/render/camera.h"
+#include "core/render/reference_tracer.h"
+#include "core/render/render_file.h"
+#include "core/render/render_setup.h"
+#include "core/scene/scene.h"
+#include "core/tree/reference_builder.h"
 #include "tests/test_opencl_fixture.h"
 
 using namespace kdray;

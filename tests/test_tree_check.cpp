@@ -8,9 +8,9 @@
 #include <random>
 #include <string>
 
-#include "core/reference_builder.h"
-#include "core/tree_check.h"
-#include "core/tree_stats.h"
+#include "core/tree/reference_builder.h"
+#include "core/tree/tree_check.h"
+#include "core/tree/tree_stats.h"
 #include "tests/support.h"
 
 using namespace kdray;

@@ -10,15 +10,15 @@
 #include <string>
 #include <vector>
 
-#include "cl/render/opencl_renderer.h"
-#include "core/image.h"
-#include "core/image_codec.h"
-#include "core/kd_render.h"
-#include "core/kd_traverse.h"
-#include "core/reference_builder.h"
-#include "core/reference_tracer.h"
-#include "core/render_file.h"
-#include "core/render_setup.h"
+#include "cl/renderer/opencl_renderer.h"
+#include "core/device/kd_render.h"
+#include "core/device/kd_traverse.h"
+#include "core/io/image.h"
+#include "core/io/image_codec.h"
+#include "core/render/reference_tracer.h"
+#include "core/render/render_file.h"
+#include "core/render/render_setup.h"
+#include "core/tree/reference_builder.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
 

@@ -9,8 +9,8 @@
 
 #include "cl/runtime/program_cache.h"
 #include "cl/runtime/work_group.h"
+#include "core/device/kd_build_shared.h"
 #include "core/error.h"
-#include "core/kd_build_shared.h"
 #include "tests/test_opencl_fixture.h"
 
 using namespace kdray;

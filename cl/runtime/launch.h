@@ -1,7 +1,7 @@
 // launch.h — one-dimensional kernel launches with kdray's error context. Every kernel of the
 // builder takes its element count as an argument and returns early past it, so the global size is
-// rounded up to a multiple of KDRAY_LAUNCH_GROUP (core/kd_build_shared.h, where the per-level
-// small stage's kernel reads it too) and every launch uses that one work-group size.
+// rounded up to a multiple of KDRAY_LAUNCH_GROUP (core/device/kd_build_shared.h, where the
+// per-level small stage's kernel reads it too) and every launch uses that one work-group size.
 //
 // Why a fixed work-group size: PoCL compiles a separate work-group function for every local size
 // it meets, and left to itself it picks the local size from the global size, which changes at
@@ -21,7 +21,7 @@
 #include "cl/runtime/cl_error.h"
 #include "cl/runtime/device.h"
 #include "cl/runtime/work_group.h"
-#include "core/kd_build_shared.h"
+#include "core/device/kd_build_shared.h"
 
 namespace kdray {
 

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "core/mtl_prepare.h"
+#include "core/scene/mtl_prepare.h"
 
 namespace {
 

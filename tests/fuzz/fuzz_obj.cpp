@@ -18,8 +18,8 @@
 #include <string_view>
 
 #include "core/error.h"
-#include "core/obj_validate.h"
-#include "core/scene.h"
+#include "core/scene/obj_validate.h"
+#include "core/scene/scene.h"
 
 namespace fs = std::filesystem;
 

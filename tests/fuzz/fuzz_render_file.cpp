@@ -8,9 +8,9 @@
 #include <cstdlib>
 #include <string>
 
-#include "core/camera.h"
 #include "core/error.h"
-#include "core/render_file.h"
+#include "core/render/camera.h"
+#include "core/render/render_file.h"
 
 namespace {
 

@@ -10,8 +10,8 @@
 #include <string>
 
 #include "core/error.h"
-#include "core/tree_check.h"
-#include "core/tree_file.h"
+#include "core/tree/tree_check.h"
+#include "core/tree/tree_file.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     std::string bytes(reinterpret_cast<const char*>(data), size);

@@ -1,12 +1,12 @@
-/* layout.cl — reports the device compiler's sizeof of every struct in core/kd_shared.h and
- * core/kd_build_shared.h, so that a test can compare it with the host's: the headers are only
- * shared safely while both compilers lay the structs out alike. out[0] = number of entries, then
- * one sizeof each, in the order KdNode, KdRay, KdHit, KdMaterial, KdLight, KdView, KdRayCounts,
- * KdBuildBox, KdBuildNode, KdSmallNode, KdLargeNode, KdLargeSplit, KdLargeCuts, KdSmallRoot,
- * KdLargeSplitArgs, KdLargeLevelArgs, KdSmallBatchArgs, KdEmitter, KdTexture, KdSmallLevelNode,
- * KdSceneLayout, KdRenderLaunch, KdTraceCost. */
-#include "core/kd_build_shared.h"
-#include "core/kd_shared.h"
+/* layout.cl — reports the device compiler's sizeof of every struct in core/device/kd_shared.h and
+ * core/device/kd_build_shared.h, so that a test can compare it with the host's: the headers are
+ * only shared safely while both compilers lay the structs out alike. out[0] = number of entries,
+ * then one sizeof each, in the order KdNode, KdRay, KdHit, KdMaterial, KdLight, KdView,
+ * KdRayCounts, KdBuildBox, KdBuildNode, KdSmallNode, KdLargeNode, KdLargeSplit, KdLargeCuts,
+ * KdSmallRoot, KdLargeSplitArgs, KdLargeLevelArgs, KdSmallBatchArgs, KdEmitter, KdTexture,
+ * KdSmallLevelNode, KdSceneLayout, KdRenderLaunch, KdTraceCost. */
+#include "core/device/kd_build_shared.h"
+#include "core/device/kd_shared.h"
 
 __kernel void kd_report_layout(__global uint* out) {
     if (get_global_id(0) != 0) return;

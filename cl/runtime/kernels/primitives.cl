@@ -9,8 +9,8 @@
  * work-group's items run one after another anyway.
  *
  * Boxes are KDRAY_BOX_FLOATS (6) floats: lo.xyz, hi.xyz. An empty box is lo = +inf, hi = -inf. */
-#include "core/kd_shared.h"
-#include "core/kd_build_shared.h"
+#include "core/device/kd_shared.h"
+#include "core/device/kd_build_shared.h"
 
 /* Scan, step 1: work-item i scans elements [i*chunk, min(n, (i+1)*chunk)) sequentially into out
  * (exclusive, starting from 0) and writes the chunk's total to sums[i]. out may alias in. */
@@ -95,8 +95,8 @@ KDRAY_INLINE void kd_union_boxes(__global const float* boxes, uint first, uint e
     out[3] = bmax.x, out[4] = bmax.y, out[5] = bmax.z;
 }
 
-/* Segmented reduction, chunks of at most KDRAY_REDUCE_CHUNK (core/kd_build_shared.h) elements:
- * segment s covers boxes [seg_start[s], seg_start[s] + seg_count[s]) and owns chunks
+/* Segmented reduction, chunks of at most KDRAY_REDUCE_CHUNK (core/device/kd_build_shared.h)
+ * elements: segment s covers boxes [seg_start[s], seg_start[s] + seg_count[s]) and owns chunks
  * [chunk_start[s], chunk_start[s + 1]), ceil(count / chunk) of them. Work-item c finds its
  * segment by binary search and writes the union of its chunk's boxes to chunk_boxes[c]. */
 __kernel void kd_reduce_box_chunks(__global const float* boxes, __global const uint* seg_start,

@@ -1,0 +1,34 @@
+#include "cl/builder/opencl_tree_builder.h"
+
+#include <memory>
+
+#include "core/tree/build_quality.h"
+
+namespace kdray {
+
+void OpenClTreeBuilder::prepare() {
+    prepare_opencl_builder(session_.device(), params_);
+}
+
+BuiltTree OpenClTreeBuilder::build(const Scene& scene) {
+    BuiltTree built;
+    auto on_device = std::make_shared<OpenClResidentTree>();
+    built.tree =
+        build_opencl(session_.device(), scene, params_, &built.report, &on_device->buffers);
+    built.on_device = std::move(on_device);
+    return built;
+}
+
+std::string OpenClTreeBuilder::description() {
+    return "opencl on " + session_.device().info().name;
+}
+
+std::string OpenClTreeBuilder::quality() {
+    return build_quality_of(params_);
+}
+
+bool OpenClTreeBuilder::computes_on_host() {
+    return session_.device().is_cpu();
+}
+
+}  // namespace kdray

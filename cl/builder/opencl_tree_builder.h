@@ -1,0 +1,36 @@
+// opencl_tree_builder.h — build_opencl (Zhou et al. 2008) behind core's TreeBuilder interface,
+// on the run's DeviceSession (opened on first need, shared with the tracer). The tree's device
+// buffers cross to the tracer as an OpenClResidentTree, opaque to everything outside cl/.
+#pragma once
+
+#include <string>
+
+#include "cl/builder/opencl_builder.h"
+#include "cl/runtime/device_session.h"
+#include "core/tree/tree_builder.h"
+
+namespace kdray {
+
+/// The OpenCL builder's tree as it lies on its device, for an OpenCL tracer on that device.
+struct OpenClResidentTree final : DeviceResidentTree {
+    DeviceTree buffers;
+};
+
+class OpenClTreeBuilder final : public TreeBuilder {
+  public:
+    OpenClTreeBuilder(DeviceSession& session, const BuildParams& params)
+        : session_(session), params_(params) {}
+
+    /// Opens the device and builds the builder's programs (prepare_opencl_builder).
+    void prepare() override;
+    BuiltTree build(const Scene& scene) override;
+    std::string description() override;
+    std::string quality() override;
+    bool computes_on_host() override;
+
+  private:
+    DeviceSession& session_;
+    BuildParams params_;
+};
+
+}  // namespace kdray

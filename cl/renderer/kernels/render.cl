@@ -1,0 +1,311 @@
+/* render.cl — the render kernels: the shared shading of core/device/kd_render.h over the kd-tree
+ * built on the device. Built once per effects combination (-DKDRAY_COMPILED_EFFECTS), so a matte
+ * scene's kernel holds no secondary-ray code at all, and per triangle test
+ * (-DKDRAY_COMPILED_INTERSECT, watertight unless it says Moller-Trumbore).
+ *
+ *   kd_trace_camera_packets  (CPU devices) the primary rays of 4x4 pixel tiles as packets of 16
+ *                            (packet_traverse.cl), their hits into a buffer
+ *   kd_trace_shadow_packets  (CPU devices, frames with lights) the shadow rays from those hits,
+ *                            a packet per tile and light, a bit per blocked ray into a buffer
+ *   kd_render_pixels         one work-item per pixel: its samples, shaded; the primary hits come
+ *                            from that buffer when there is one, else they are traced here
+ *   kd_shade_traced_pixels   one work-item per pixel of one sample whose hit is in that buffer,
+ *                            shaded where no reflection or refraction follows
+ *
+ * The packet kernels and kd_shade_traced_pixels exist only in programs built with
+ * -DKDRAY_COMPILED_PACKETS=1 (CPU devices, opencl_renderer.cpp): a packet work-item holds 35-37 KB
+ * of private arrays, most of the program, which a GPU, running one ray per lane, never launches.
+ *
+ * Every kernel takes the tree's buffers (nodes, leaf_indices, triangles) first and a
+ * KdRenderLaunch record (core/device/kd_shared.h: the view, the tree's box, the launch's rows and
+ * outputs); those that shade also take the frame's read-only arrays in one buffer, scene_data,
+ * with the KdSceneLayout record of where each lies; then the buffers the kernel writes. */
+#include "core/device/kd_render.h"
+/* After kd_render.h: the embedding inlines a header's text at its first #include only
+ * (embed_kernels.cmake), so the headers that packet_traverse.cl shares must come in outside the
+ * #if. */
+#ifndef KDRAY_COMPILED_PACKETS
+#error "render.cl is built with -DKDRAY_COMPILED_PACKETS=0 or 1 (opencl_renderer.cpp)"
+#endif
+#if KDRAY_COMPILED_PACKETS
+#include "cl/renderer/kernels/packet_traverse.cl"
+#endif
+
+/* The scene view the kernels read: the tree's buffers, the launch's box, and the frame's arrays
+ * at their byte offsets in scene_data. vertex_normals is 0 where the scene has none (flat
+ * shading). */
+KDRAY_INLINE void kd_scene_view(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
+                                __global const float* triangles, __global const uchar* scene_data,
+                                const KdSceneLayout* layout, const KdRenderLaunch* launch,
+                                KdSceneView* scene) {
+    scene->nodes = nodes;
+    scene->leaf_indices = leaf_indices;
+    scene->triangles = triangles;
+    scene->vertex_normals = layout->has_vertex_normals
+                                ? (__global const float*)(scene_data + layout->vertex_normals)
+                                : 0;
+    scene->material_ids = (__global const kd_u32*)(scene_data + layout->material_ids);
+    scene->materials = (__global const KdMaterial*)(scene_data + layout->materials);
+    scene->lights = (__global const KdLight*)(scene_data + layout->lights);
+    scene->emitters = (__global const KdEmitter*)(scene_data + layout->emitters);
+    scene->texcoords = (__global const float*)(scene_data + layout->texcoords);
+    scene->textures = (__global const KdTexture*)(scene_data + layout->textures);
+    scene->texels = (__global const float*)(scene_data + layout->texels);
+    for (int i = 0; i < 6; ++i) scene->bounds[i] = launch->bounds[i];
+    scene->intersect = KDRAY_COMPILED_INTERSECT;
+}
+
+#if KDRAY_COMPILED_PACKETS
+/* kd_hash and kd_unit_float of core/device/kd_render.h, per lane. */
+KDRAY_INLINE uint16 kd_hash16(uint16 x) {
+    KDRAY_LOWBIAS32(x);
+    return x;
+}
+KDRAY_INLINE float16 kd_unit_float16(uint16 h) {
+    return KDRAY_UNIT_FLOAT(convert_float16, h);
+}
+
+/* Primary ray r of pixels (x, y), one per lane: kd_primary_ray and kd_camera_ray of core/
+ * kd_render.h through the same macros, so that each lane's ray is the scalar one bit for bit. */
+KDRAY_INLINE KdPacketRays kd_primary_packet(const KdView* view, uint16 x, uint16 y, kd_u32 r,
+                                            int16 valid) {
+    float16 px = convert_float16(x) + 0.5f, py = convert_float16(y) + 0.5f;
+    if (view->spp > 1u && r != view->spp) {
+        const uint16 h = kd_hash16(KDRAY_SAMPLE_KEY(view, x, y, r));
+        px = convert_float16(x) + kd_unit_float16(h);
+        py = convert_float16(y) + kd_unit_float16(kd_hash16(h));
+    }
+    const float16 sx = KDRAY_SCREEN_X(view, px);
+    const float16 sy = KDRAY_SCREEN_Y(view, py);
+    KdPacketRays rays;
+    for (int a = 0; a < 3; ++a) {
+        rays.org[a] = (float16)(view->origin[a]);
+        rays.dir[a] = KDRAY_CAMERA_DIR(view, a, sx, sy);
+    }
+    const float16 inv = KDRAY_INV_LENGTH3(rays.dir[0], rays.dir[1], rays.dir[2]);
+    for (int a = 0; a < 3; ++a) rays.dir[a] = rays.dir[a] * inv;
+    rays.tmin = (float16)(0.0f);
+    rays.tmax = (float16)(KDRAY_INF);
+    rays.valid = valid;
+    return rays;
+}
+
+/* Work-item (tile x, tile y, primary ray r) traces ray r (kd_primary_ray) of the tile's pixels,
+ * rows first_row.. first_row + rows of the image (the launch's), into
+ * hits[r * rows * width + pixel], pixel counted from first_row. */
+__kernel void kd_trace_camera_packets(__global const KdNode* nodes,
+                                      __global const kd_u32* leaf_indices,
+                                      __global const float* triangles, const KdRenderLaunch launch,
+                                      __global KdHit* hits) {
+    const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE;
+    const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE;
+    const kd_u32 r = (kd_u32)get_global_id(2);
+    const kd_u32 rows = launch.rows;
+    if (x0 >= launch.view.width || row0 >= rows || r >= kd_primary_rays_per_pixel(&launch.view))
+        return;
+    const KdView v = launch.view;
+    float box[6];
+    for (int i = 0; i < 6; ++i) box[i] = launch.bounds[i];
+    /* Lane i: pixel (x0 + i % 4, row0 + i / 4) of the tile. */
+    const uint16 lane = (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    const uint16 x = x0 + lane % KDRAY_PACKET_TILE, row = row0 + lane / KDRAY_PACKET_TILE;
+    const int16 valid = (x < v.width) & (row < rows);
+    const KdPacketRays rays = kd_primary_packet(&v, x, launch.first_row + row, r, valid);
+    KdHit out[KDRAY_PACKET_SIZE];
+    kd_trace_packet(nodes, leaf_indices, triangles, box, &rays, 0, out);
+    __global KdHit* plane = hits + (size_t)r * rows * v.width;
+    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
+        const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE);
+        const kd_u32 ri = row0 + (kd_u32)(i / KDRAY_PACKET_TILE);
+        if (xi < v.width && ri < rows) plane[(size_t)ri * v.width + xi] = out[i];
+    }
+}
+
+#if (KDRAY_COMPILED_EFFECTS & KDRAY_EFFECT_SHADOWS) != 0
+/* Work-item (tile x, tile y, primary ray r): the shadow rays from the hits of ray r of the tile's
+ * pixels (kd_trace_camera_packets' hits, laid out as it writes them) toward each light, a packet
+ * per light, into occluded (the same layout): bit i where light i's shadow ray is blocked. Each
+ * lane's shadow ray is the one kd_direct_light casts (the same shared functions), and its any-hit
+ * walk finds it blocked exactly when kd_trace_occluded does. Bits of rays kd_direct_light will
+ * not cast (a light behind the surface) stay 0 and are never read. At most
+ * KDRAY_PACKET_SHADOW_LIGHTS lights. */
+__kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
+                                      __global const kd_u32* leaf_indices,
+                                      __global const float* triangles,
+                                      __global const uchar* scene_data, const KdSceneLayout layout,
+                                      const KdRenderLaunch launch, __global const KdHit* traced,
+                                      __global kd_u32* occluded) {
+    const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE;
+    const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE;
+    const kd_u32 r = (kd_u32)get_global_id(2);
+    const kd_u32 first_row = launch.first_row, rows = launch.rows;
+    if (x0 >= launch.view.width || row0 >= rows || r >= kd_primary_rays_per_pixel(&launch.view))
+        return;
+    /* With spp > 1, ray spp is the AOV's centre ray, which nothing shades. */
+    if (launch.view.spp > 1u && r == launch.view.spp) return;
+    const KdView v = launch.view;
+    KdSceneView scene;
+    kd_scene_view(nodes, leaf_indices, triangles, scene_data, &layout, &launch, &scene);
+    /* Per lane (pixel (x0 + i % 4, row0 + i / 4)): its hit's point and geometric and shading
+     * normals, as kd_trace_sample computes them. */
+    kd_f32 p[KDRAY_PACKET_SIZE][3], ng[KDRAY_PACKET_SIZE][3], ns[KDRAY_PACKET_SIZE][3];
+    int inside[KDRAY_PACKET_SIZE], has_hit[KDRAY_PACKET_SIZE];
+    kd_u32 blocked[KDRAY_PACKET_SIZE];
+    size_t at[KDRAY_PACKET_SIZE];
+    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
+        const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE);
+        const kd_u32 ri = row0 + (kd_u32)(i / KDRAY_PACKET_TILE);
+        blocked[i] = 0u;
+        has_hit[i] = 0;
+        at[i] = (size_t)r * rows * v.width + (size_t)ri * v.width + xi;
+        inside[i] = xi < v.width && ri < rows;
+        if (!inside[i]) continue;
+        const KdHit hit = traced[at[i]];
+        if (hit.prim == KDRAY_NO_HIT) continue;
+        KdRay primary;
+        kd_primary_ray(&v, xi, first_row + ri, r, &primary);
+        kd_facing_normal(triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE, primary.dir,
+                         ng[i]);
+        kd_shading_normal(&scene, hit, ng[i], ns[i]);
+        kd_hit_point(&primary, hit.t, p[i]);
+        has_hit[i] = 1;
+    }
+    float box[6];
+    for (int i = 0; i < 6; ++i) box[i] = launch.bounds[i];
+    const kd_u32 light_count = kd_shining_lights(&v);
+    for (kd_u32 light = 0; light < light_count; ++light) {
+        float org[3][KDRAY_PACKET_SIZE], dir[3][KDRAY_PACKET_SIZE], tmax[KDRAY_PACKET_SIZE];
+        int valid[KDRAY_PACKET_SIZE];
+        int any_ray = 0;
+        for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
+            valid[i] = 0;
+            tmax[i] = 0.0f;
+            for (int a = 0; a < 3; ++a) org[a][i] = dir[a][i] = 1.0f;
+            if (!has_hit[i]) continue;
+            kd_f32 to_light[3], irradiance[3], distance;
+            kd_light_at(&scene, &v, light_count, light, p[i], to_light, irradiance, &distance);
+            if (kd_light_cosine(ng[i], ns[i], to_light) <= 0.0f) continue;
+            KdRay shadow;
+            kd_shadow_ray(&v, p[i], ng[i], to_light, distance, &shadow);
+            for (int a = 0; a < 3; ++a) {
+                org[a][i] = shadow.org[a];
+                dir[a][i] = shadow.dir[a];
+            }
+            tmax[i] = shadow.tmax;
+            valid[i] = -1;
+            any_ray = 1;
+        }
+        if (!any_ray) continue;
+        KdPacketRays rays;
+        for (int a = 0; a < 3; ++a) {
+            rays.org[a] = vload16(0, org[a]);
+            rays.dir[a] = vload16(0, dir[a]);
+        }
+        rays.tmin = (float16)(0.0f);
+        rays.tmax = vload16(0, tmax);
+        rays.valid = vload16(0, valid);
+        KdHit out[KDRAY_PACKET_SIZE];
+        kd_trace_packet(nodes, leaf_indices, triangles, box, &rays, 1, out);
+        for (int i = 0; i < KDRAY_PACKET_SIZE; ++i)
+            if (valid[i] && out[i].prim != KDRAY_NO_HIT) blocked[i] |= 1u << light;
+    }
+    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i)
+        if (inside[i]) occluded[at[i]] = blocked[i];
+}
+#endif
+#endif /* KDRAY_COMPILED_PACKETS */
+
+/* The work-item of pixel (get_global_id(0), first_row + get_global_id(1)), for both pixel kernels
+ * below. direct_only: the pixel's one sample, whose primary hit is in traced, shaded by
+ * kd_trace_direct_sample alone; a constant in each kernel, so that kd_shade_traced_pixels holds
+ * no primary walk and no pending-ray stack. */
+KDRAY_HOT_INLINE void kd_pixel_work_item(
+    __global const KdNode* nodes, __global const kd_u32* leaf_indices,
+    __global const float* triangles, __global const uchar* scene_data, const KdSceneLayout* layout,
+    const KdRenderLaunch* launch, __global float* rgb, __global KdHit* hits,
+    __global float* normals, __global KdRayCounts* ray_counts, __global const KdHit* traced,
+    __global const kd_u32* occluded, const int direct_only) {
+    const KdView* view = &launch->view;
+    const kd_u32 rows = launch->rows, outputs = launch->outputs;
+    const kd_u32 x = (kd_u32)get_global_id(0);
+    const kd_u32 row = (kd_u32)get_global_id(1);
+    if (x >= view->width || row >= rows) return;
+    const kd_u32 y = launch->first_row + row;
+    KdSceneView scene;
+    kd_scene_view(nodes, leaf_indices, triangles, scene_data, layout, launch, &scene);
+    const size_t in_launch = (size_t)row * view->width + x;
+    __global const kd_u32* blocked =
+        (outputs & KDRAY_RENDER_TRACED_SHADOWS) ? occluded + in_launch : 0;
+    KdPixel pixel;
+    if (direct_only) {
+        const KdHit hit = traced[in_launch];
+        pixel.rays.primary = pixel.rays.shadow = pixel.rays.reflection = pixel.rays.refraction = 0u;
+        pixel.rays.area_shadow = 0u;
+        KdRay primary;
+        kd_primary_ray(view, x, y, 0u, &primary);
+        kd_trace_direct_sample(&scene, view, &primary, &hit, blocked, pixel.rgb, &pixel.rays,
+                               &pixel.centre_hit, pixel.normal);
+    } else {
+        kd_render_pixel(&scene, view, x, y,
+                        (outputs & KDRAY_RENDER_TRACED_PRIMARY) ? traced + in_launch : 0, blocked,
+                        rows * view->width, &pixel);
+    }
+    const size_t i = (size_t)y * view->width + x;
+    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = pixel.rgb[c];
+    if (outputs & KDRAY_RENDER_NORMALS)
+        for (int c = 0; c < 3; ++c) normals[3 * i + c] = pixel.normal[c];
+    hits[i] = pixel.centre_hit;
+#if KDRAY_COMPILED_EFFECTS != 0
+    ray_counts[i] = pixel.rays;
+#endif
+}
+
+/* One pixel per work-item; launch.outputs: KDRAY_RENDER_* bits. With KDRAY_RENDER_TRACED_PRIMARY
+ * the primary rays' hits are in traced (as kd_trace_camera_packets writes them), else every ray
+ * is traced here. */
+__kernel void kd_render_pixels(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
+                               __global const float* triangles, __global const uchar* scene_data,
+                               const KdSceneLayout layout, const KdRenderLaunch launch,
+                               __global float* rgb, __global KdHit* hits, __global float* normals,
+                               __global KdRayCounts* ray_counts, __global const KdHit* traced,
+                               __global const kd_u32* occluded) {
+    kd_pixel_work_item(nodes, leaf_indices, triangles, scene_data, &layout, &launch, rgb, hits,
+                       normals, ray_counts, traced, occluded, 0);
+}
+
+/* The `cost` AOV of the launch's pixels (kd_pixel_cost: the centre ray's walk, counted), into
+ * costs[y * width + x]; launched after the pixels only for frames that write it. The walk reads
+ * only the tree, its box and the triangle test, so the view's shading arrays stay unset. */
+__kernel void kd_trace_costs(__global const KdNode* nodes, __global const kd_u32* leaf_indices,
+                             __global const float* triangles, const KdRenderLaunch launch,
+                             __global KdTraceCost* costs) {
+    const kd_u32 x = (kd_u32)get_global_id(0);
+    const kd_u32 row = (kd_u32)get_global_id(1);
+    if (x >= launch.view.width || row >= launch.rows) return;
+    KdSceneView scene;
+    scene.nodes = nodes;
+    scene.leaf_indices = leaf_indices;
+    scene.triangles = triangles;
+    for (int i = 0; i < 6; ++i) scene.bounds[i] = launch.bounds[i];
+    scene.intersect = KDRAY_COMPILED_INTERSECT;
+    const kd_u32 y = launch.first_row + row;
+    KdTraceCost cost;
+    kd_pixel_cost(&scene, &launch.view, x, y, &cost);
+    costs[(size_t)y * launch.view.width + x] = cost;
+}
+
+#if KDRAY_COMPILED_PACKETS
+/* kd_render_pixels for spp 1 with the primary hits traced, in a kernel without reflection and
+ * refraction: kd_render_pixel's one sample and its shading, nothing else. */
+__kernel void kd_shade_traced_pixels(__global const KdNode* nodes,
+                                     __global const kd_u32* leaf_indices,
+                                     __global const float* triangles,
+                                     __global const uchar* scene_data, const KdSceneLayout layout,
+                                     const KdRenderLaunch launch, __global float* rgb,
+                                     __global KdHit* hits, __global float* normals,
+                                     __global KdRayCounts* ray_counts, __global const KdHit* traced,
+                                     __global const kd_u32* occluded) {
+    kd_pixel_work_item(nodes, leaf_indices, triangles, scene_data, &layout, &launch, rgb, hits,
+                       normals, ray_counts, traced, occluded, 1);
+}
+#endif /* KDRAY_COMPILED_PACKETS */

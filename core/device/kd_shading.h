@@ -1,0 +1,331 @@
+/* kd_shading.h — the pieces of shading that kd_render.h, kd_area_light.h and kd_texture.h all
+ * use, in the same C subset (one source for the reference renderer and the render kernel): the
+ * effect and math macros, the scene's buffers as both sides hold them (KdSceneView), vector
+ * helpers, camera rays, hashing, normals, Fresnel, lights and shadow rays. A header of its own so
+ * that includes run one way: kd_render.h includes kd_area_light.h and kd_texture.h, and all three
+ * include this.
+ */
+#ifndef KDRAY_KD_SHADING_H
+#define KDRAY_KD_SHADING_H
+
+#include "core/device/kd_shared.h"
+#include "core/device/kd_traverse.h"
+
+#ifdef KDRAY_DEVICE_CODE
+#ifndef KDRAY_COMPILED_EFFECTS
+#error "render kernels need -DKDRAY_COMPILED_EFFECTS=<KDRAY_EFFECT_* bits>"
+#endif
+#define KDRAY_EFFECT_ON(view, bit) ((KDRAY_COMPILED_EFFECTS & (bit)) != 0u)
+#define KDRAY_SQRT sqrt
+#define KDRAY_EXP2 exp2
+#define KDRAY_LOG2 log2
+#define KDRAY_FLOOR floor
+#define KDRAY_ISFINITE isfinite
+#else
+#define KDRAY_EFFECT_ON(view, bit) (((view)->effects & (bit)) != 0u)
+#define KDRAY_SQRT std::sqrt
+#define KDRAY_EXP2 std::exp2
+#define KDRAY_LOG2 std::log2
+#define KDRAY_FLOOR std::floor
+#define KDRAY_ISFINITE std::isfinite
+#endif
+
+#define KDRAY_PI 3.14159265358979323846f
+/* The largest float (FLT_MAX, spelled out for both compilers). Every sum of radiance saturates
+ * there: Ke 3e38, a valid finite Kd-range value, summed over 16 samples to inf, and a bound on Ke
+ * could not prevent it, since a pixel's radiance also grows with the lights, the emitters'
+ * geometry and the bounces. Below it every sum is bit for bit what it was. */
+#define KDRAY_RADIANCE_MAX 3.40282346638528859812e+38f
+/* A path whose weight falls below this adds nothing visible; it is not followed. */
+#define KDRAY_MIN_PATH_WEIGHT 1e-3f
+
+/* Scene buffers as both sides hold them. */
+typedef struct KdSceneView {
+    KDRAY_GLOBAL const KdNode* nodes;
+    KDRAY_GLOBAL const kd_u32* leaf_indices;
+    KDRAY_GLOBAL const kd_f32* triangles;
+    /* Unit normals at each triangle's corners (KDRAY_FLOATS_PER_TRIANGLE per triangle), or 0:
+     * the scene shades flat. */
+    KDRAY_GLOBAL const kd_f32* vertex_normals;
+    KDRAY_GLOBAL const kd_u32* material_ids;
+    KDRAY_GLOBAL const KdMaterial* materials;
+    KDRAY_GLOBAL const KdLight* lights;
+    /* The frame's emitter table (view->emitter_count entries; read with area lights only). */
+    KDRAY_GLOBAL const KdEmitter* emitters;
+    /* With textures only: each triangle's vt corners (6 floats, u NaN where it has none), the
+     * texture table and the texel atlas (kd_texture.h). */
+    KDRAY_GLOBAL const kd_f32* texcoords;
+    KDRAY_GLOBAL const KdTexture* textures;
+    KDRAY_GLOBAL const kd_f32* texels;
+    kd_f32 bounds[6];
+    kd_u32 intersect; /* KDRAY_INTERSECT_*: the ray-triangle test (a kernel's is compiled in) */
+} KdSceneView;
+
+/* Nearest hit, and occlusion, in the scene with its triangle test. */
+KDRAY_HOT_INLINE void kd_scene_closest(const KdSceneView* scene, const KdRay* ray, KdHit* hit) {
+    kd_trace(scene->nodes, scene->leaf_indices, scene->triangles, scene->bounds, ray, 0,
+             scene->intersect, hit, 0);
+}
+KDRAY_HOT_INLINE int kd_scene_occluded(const KdSceneView* scene, const KdRay* ray) {
+    KdHit hit;
+    kd_trace(scene->nodes, scene->leaf_indices, scene->triangles, scene->bounds, ray, 1,
+             scene->intersect, &hit, 0);
+    return hit.prim != KDRAY_NO_HIT;
+}
+
+/* What one pixel produces. */
+typedef struct KdPixel {
+    kd_f32 rgb[3];
+    KdHit centre_hit; /* the AOV: the hit of the ray through the pixel centre */
+    kd_f32 normal[3]; /* geometric normal of centre_hit, facing the ray (0 on a miss) */
+    KdRayCounts rays;
+} KdPixel;
+
+KDRAY_INLINE void kd_set3(kd_f32* out, kd_f32 x, kd_f32 y, kd_f32 z) {
+    out[0] = x;
+    out[1] = y;
+    out[2] = z;
+}
+KDRAY_INLINE kd_f32 kd_dot3(const kd_f32* a, const kd_f32* b) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+/* The camera ray's arithmetic, written once as macros over any float type: kd_camera_ray and
+ * kd_primary_ray below evaluate them on scalars, render.cl's kd_primary_packet on the float16
+ * lanes of a packet, with the same operations in the same order, so that each lane's ray is the
+ * scalar one bit for bit.
+ *   KDRAY_INV_LENGTH3   1 / |(x, y, z)|, by which kd_normalize3 scales
+ *   KDRAY_SCREEN_X/Y    conventions.md's sx and sy of image position (px, py) in pixels
+ *   KDRAY_CAMERA_DIR    axis a of the direction before normalising, f + (r * sx + u * sy)
+ *   KDRAY_SAMPLE_KEY    what kd_hash turns into the jitter of sample r of pixel (x, y)
+ *   KDRAY_UNIT_FLOAT    a hash's top 24 bits as a float in [0, 1), through `to_float` */
+#define KDRAY_INV_LENGTH3(x, y, z) (1.0f / KDRAY_SQRT((x) * (x) + (y) * (y) + (z) * (z)))
+#define KDRAY_SCREEN_X(view, px) \
+    ((2.0f * (px) / (kd_f32)(view)->width - 1.0f) * (view)->tan_half_fov * (view)->aspect)
+#define KDRAY_SCREEN_Y(view, py) \
+    ((1.0f - 2.0f * (py) / (kd_f32)(view)->height) * (view)->tan_half_fov)
+#define KDRAY_CAMERA_DIR(view, a, sx, sy) \
+    ((view)->forward[a] + ((view)->right[a] * (sx) + (view)->up[a] * (sy)))
+#define KDRAY_SAMPLE_KEY(view, x, y, r) \
+    (((y) * (view)->width + (x)) * 0x9E3779B9u ^ kd_hash((r) + (view)->seed))
+#define KDRAY_UNIT_FLOAT(to_float, h) (to_float((h) >> 8) * (1.0f / 16777216.0f))
+
+/* Unit vector, computed as Embree's peer does (multiply by 1 / length), so that centre rays
+ * match it bit for bit. */
+KDRAY_INLINE void kd_normalize3(kd_f32* a) {
+    const kd_f32 inv = KDRAY_INV_LENGTH3(a[0], a[1], a[2]);
+    kd_set3(a, a[0] * inv, a[1] * inv, a[2] * inv);
+}
+
+/* The ray through image position (px, py) in pixels, conventions.md's camera model, evaluated in
+ * the same order as ../shared/peers/embree: d = normalize(f + (r * sx + u * sy)). */
+KDRAY_HOT_INLINE void kd_camera_ray(const KdView* view, kd_f32 px, kd_f32 py, KdRay* ray) {
+    const kd_f32 sx = KDRAY_SCREEN_X(view, px);
+    const kd_f32 sy = KDRAY_SCREEN_Y(view, py);
+    for (int a = 0; a < 3; ++a) {
+        ray->org[a] = view->origin[a];
+        ray->dir[a] = KDRAY_CAMERA_DIR(view, a, sx, sy);
+    }
+    kd_normalize3(ray->dir);
+    ray->tmin = 0.0f;
+    ray->tmax = KDRAY_INF;
+}
+
+/* x^y for x > 0, as 2^(y log2 x) on both sides: OpenCL's pow in PoCL (an extended-precision
+ * exp and log) took 17% of a BART Kitchen frame's CPU time (perf, primary rays with a headlight),
+ * exp2 and log2 a fraction of it; the highlight needs no more than float accuracy. */
+KDRAY_HOT_INLINE kd_f32 kd_pow_positive(kd_f32 x, kd_f32 y) {
+    return KDRAY_EXP2(y * KDRAY_LOG2(x));
+}
+
+/* A 32-bit integer hash (Wellons' lowbias32): decorrelated jitter without per-pixel state. The
+ * steps are a macro so that a kernel can hash a vector of 32-bit lanes with the same code. */
+#define KDRAY_LOWBIAS32(x) \
+    ((x) ^= (x) >> 16, (x) *= 0x7feb352du, (x) ^= (x) >> 15, (x) *= 0x846ca68bu, (x) ^= (x) >> 16)
+KDRAY_INLINE kd_u32 kd_hash(kd_u32 x) {
+    KDRAY_LOWBIAS32(x);
+    return x;
+}
+KDRAY_INLINE kd_f32 kd_unit_float(kd_u32 h) {
+    return KDRAY_UNIT_FLOAT((kd_f32), h);
+}
+
+/* Geometric unit normal of a triangle, facing against `dir`. */
+KDRAY_HOT_INLINE void kd_facing_normal(KDRAY_GLOBAL const kd_f32* tri, const kd_f32* dir,
+                                       kd_f32* n) {
+    const kd_f32 e1[3] = {tri[3] - tri[0], tri[4] - tri[1], tri[5] - tri[2]};
+    const kd_f32 e2[3] = {tri[6] - tri[0], tri[7] - tri[1], tri[8] - tri[2]};
+    kd_set3(n, e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0]);
+    kd_normalize3(n);
+    if (kd_dot3(n, dir) > 0.0f) kd_set3(n, -n[0], -n[1], -n[2]);
+}
+
+/* The shading normal at a hit whose geometric normal, facing the ray, is ng: the corners' normals
+ * interpolated at the hit's barycentrics, made unit length and turned to ng's side (a mesh's
+ * normals need not agree with its winding, and either side of a triangle may be seen); ng itself
+ * in a scene without vertex normals, or where the corners' normals cancel. */
+KDRAY_HOT_INLINE void kd_shading_normal(const KdSceneView* scene, KdHit hit, const kd_f32* ng,
+                                        kd_f32* ns) {
+    kd_set3(ns, ng[0], ng[1], ng[2]);
+    if (!scene->vertex_normals) return;
+    KDRAY_GLOBAL const kd_f32* vn =
+        scene->vertex_normals + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE;
+    const kd_f32 w = 1.0f - hit.u - hit.v;
+    kd_f32 n[3];
+    for (int a = 0; a < 3; ++a) n[a] = w * vn[a] + hit.u * vn[3 + a] + hit.v * vn[6 + a];
+    const kd_f32 length2 = kd_dot3(n, n);
+    if (!(length2 > 0.0f)) return;
+    const kd_f32 scale = (kd_dot3(n, ng) < 0.0f ? -1.0f : 1.0f) / KDRAY_SQRT(length2);
+    kd_set3(ns, n[0] * scale, n[1] * scale, n[2] * scale);
+}
+
+/* Unpolarised Fresnel reflectance of a dielectric for cos_i = cos(incidence) > 0 and
+ * eta = n_incident / n_transmitted; 1 on total internal reflection. *cos_t returns the
+ * transmitted angle's cosine. */
+KDRAY_INLINE kd_f32 kd_fresnel(kd_f32 cos_i, kd_f32 eta, kd_f32* cos_t) {
+    const kd_f32 sin2_t = eta * eta * (1.0f - cos_i * cos_i);
+    if (sin2_t >= 1.0f) {
+        *cos_t = 0.0f;
+        return 1.0f;
+    }
+    *cos_t = KDRAY_SQRT(1.0f - sin2_t);
+    const kd_f32 r_s = (eta * cos_i - *cos_t) / (eta * cos_i + *cos_t);
+    const kd_f32 r_p = (cos_i - eta * *cos_t) / (cos_i + eta * *cos_t);
+    return 0.5f * (r_s * r_s + r_p * r_p);
+}
+
+/* The mirror direction of dir about the unit normal n, cos_i = -dir . n. */
+KDRAY_INLINE void kd_reflect(const kd_f32* dir, const kd_f32* n, kd_f32 cos_i, kd_f32* out) {
+    for (int a = 0; a < 3; ++a) out[a] = dir[a] + 2.0f * cos_i * n[a];
+}
+
+/* The refracted direction of dir through the unit normal n, not yet unit length, for eta and
+ * the cosines cos_i and cos_t of kd_fresnel. */
+KDRAY_INLINE void kd_refract(const kd_f32* dir, const kd_f32* n, kd_f32 eta, kd_f32 cos_i,
+                             kd_f32 cos_t, kd_f32* out) {
+    for (int a = 0; a < 3; ++a) out[a] = eta * dir[a] + (eta * cos_i - cos_t) * n[a];
+}
+
+/* Whether the shading normal ns may bend a hit's secondary rays (dir: the incoming ray; ng: the
+ * geometric normal, facing it; eta: n_incident / n_transmitted at a dielectric, 0 where nothing
+ * refracts): not when a ray it bends would leave on the wrong side of the surface, the mirror
+ * ray into it or the refracted ray back out, as a normal interpolated across a coarse mesh does
+ * near its silhouette; the geometric normal bends every ray the right way. */
+KDRAY_HOT_INLINE int kd_shading_normal_bends(const kd_f32* dir, const kd_f32* ng, const kd_f32* ns,
+                                             kd_f32 eta) {
+    const kd_f32 cos_i = -kd_dot3(dir, ns);
+    if (!(cos_i > 0.0f)) return 0;
+    kd_f32 bent[3], cos_t;
+    kd_reflect(dir, ns, cos_i, bent);
+    if (!(kd_dot3(bent, ng) > 0.0f)) return 0;
+    if (eta > 0.0f && kd_fresnel(cos_i, eta, &cos_t) < 1.0f) {
+        kd_refract(dir, ns, eta, cos_i, cos_t, bent);
+        if (!(kd_dot3(bent, ng) < 0.0f)) return 0;
+    }
+    return 1;
+}
+
+/* The cosine by which a light in direction to_light shines on a surface (geometric normal ng,
+ * shading normal ns): by ns, and 0 unless the light is in front of both. A light behind the
+ * triangle's own plane lights nothing, even where the interpolated normal faces it: its shadow
+ * ray would only cross the triangle again (or slip past the mesh near an edge). */
+KDRAY_HOT_INLINE kd_f32 kd_light_cosine(const kd_f32* ng, const kd_f32* ns,
+                                        const kd_f32* to_light) {
+    const kd_f32 cos_l = kd_dot3(ns, to_light);
+    return kd_dot3(ng, to_light) > 0.0f && cos_l > 0.0f ? cos_l : 0.0f;
+}
+
+/* A ray waiting to be traced, with the share of the pixel it carries. */
+typedef struct KdPendingRay {
+    KdRay ray;
+    kd_f32 weight[3];
+    kd_u32 depth; /* 1 for primary rays */
+    kd_u32 kind;  /* 0 primary, 1 reflection, 2 refraction */
+} KdPendingRay;
+
+KDRAY_INLINE void kd_pending(const kd_f32* org, const kd_f32* dir, const kd_f32* weight,
+                             kd_u32 depth, kd_u32 kind, KdPendingRay* r) {
+    for (int a = 0; a < 3; ++a) {
+        r->ray.org[a] = org[a];
+        r->ray.dir[a] = dir[a];
+        r->weight[a] = weight[a];
+    }
+    r->ray.tmin = 0.0f;
+    r->ray.tmax = KDRAY_INF;
+    r->depth = depth;
+    r->kind = kind;
+}
+
+/* The lights that shine on a frame's surfaces: the render file's, which shine only with shadows
+ * on; without, the headlight. Shadows are on exactly when the render file has lights
+ * (decide_effects), so a kernel without them knows at compile time that its one light is the
+ * headlight: a loop of one trip, unrolled (PoCL, BART Kitchen headlight frame: trace 43 -> 37
+ * ms). Returns the render file's light count, 0 for the headlight. */
+KDRAY_HOT_INLINE kd_u32 kd_shining_lights(const KdView* view) {
+    return KDRAY_EFFECT_ON(view, KDRAY_EFFECT_SHADOWS) ? view->light_count : 0u;
+}
+
+/* Light i of the render file's light_count at p (light_count 0: the headlight): the unit
+ * direction toward it, the irradiance it brings and its distance (infinite for the headlight and
+ * directional lights). */
+KDRAY_HOT_INLINE void kd_light_at(const KdSceneView* scene, const KdView* view, kd_u32 light_count,
+                                  kd_u32 i, const kd_f32* p, kd_f32* to_light, kd_f32* irradiance,
+                                  kd_f32* distance) {
+    *distance = KDRAY_INF;
+    if (light_count == 0u) {
+        /* No lights in the render file: a headlight, which casts no visible shadow. */
+        kd_set3(to_light, -view->forward[0], -view->forward[1], -view->forward[2]);
+        kd_set3(irradiance, 1.0f, 1.0f, 1.0f);
+        return;
+    }
+    KDRAY_GLOBAL const KdLight* light = scene->lights + i;
+    if (light->type == KDRAY_LIGHT_POINT) {
+        kd_set3(to_light, light->vec[0] - p[0], light->vec[1] - p[1], light->vec[2] - p[2]);
+        const kd_f32 d2 = kd_dot3(to_light, to_light);
+        *distance = KDRAY_SQRT(d2);
+        kd_set3(to_light, to_light[0] / *distance, to_light[1] / *distance,
+                to_light[2] / *distance);
+        kd_set3(irradiance, light->power[0] / d2, light->power[1] / d2, light->power[2] / d2);
+    } else {
+        kd_set3(to_light, -light->vec[0], -light->vec[1], -light->vec[2]);
+        kd_set3(irradiance, light->power[0], light->power[1], light->power[2]);
+    }
+}
+
+/* The point at t along `ray`. */
+KDRAY_HOT_INLINE void kd_hit_point(const KdRay* ray, kd_f32 t, kd_f32* p) {
+    for (int a = 0; a < 3; ++a) p[a] = ray->org[a] + t * ray->dir[a];
+}
+
+/* The shadow ray from p (normal n) toward a light `distance` away along to_light. */
+KDRAY_HOT_INLINE void kd_shadow_ray(const KdView* view, const kd_f32* p, const kd_f32* n,
+                                    const kd_f32* to_light, kd_f32 distance, KdRay* shadow) {
+    for (int a = 0; a < 3; ++a) {
+        shadow->org[a] = p[a] + n[a] * view->ray_epsilon;
+        shadow->dir[a] = to_light[a];
+    }
+    shadow->tmin = 0.0f;
+    shadow->tmax = distance - view->ray_epsilon;
+}
+
+/* What m reflects toward the eye (direction `dir` of the ray that arrived) of the irradiance a
+ * light brings from direction to_light at cosine cos_l with the shading normal ns: Lambert
+ * diffuse (of colour `diffuse`, Kd textured) and the Blinn-Phong highlight, added to out. */
+KDRAY_HOT_INLINE void kd_reflected(KDRAY_GLOBAL const KdMaterial* m, const kd_f32* diffuse,
+                                   const kd_f32* ns, const kd_f32* dir, const kd_f32* to_light,
+                                   const kd_f32* irradiance, kd_f32 cos_l, kd_f32* out) {
+    kd_f32 highlight = 0.0f;
+    if (m->flags & KDRAY_MATERIAL_HIGHLIGHT) {
+        kd_f32 h[3] = {to_light[0] - dir[0], to_light[1] - dir[1], to_light[2] - dir[2]};
+        kd_normalize3(h);
+        const kd_f32 cos_h = kd_dot3(ns, h);
+        /* Normalised Blinn-Phong: (Ns + 8) / (8 pi) keeps the highlight's energy fixed. */
+        if (cos_h > 0.0f)
+            highlight =
+                (m->shininess + 8.0f) / (8.0f * KDRAY_PI) * kd_pow_positive(cos_h, m->shininess);
+    }
+    for (int c = 0; c < 3; ++c)
+        out[c] += (diffuse[c] / KDRAY_PI + m->specular[c] * highlight) * irradiance[c] * cos_l;
+}
+
+#endif /* KDRAY_KD_SHADING_H */

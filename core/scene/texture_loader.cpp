@@ -1,0 +1,118 @@
+#include "core/scene/texture_loader.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <limits>
+#include <system_error>
+#include <vector>
+
+#include "core/error.h"
+#include "core/io/image_codec.h"
+#include "core/io/input_file.h"
+
+namespace kdray {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    return s;
+}
+
+/// `name` in `folder`, or the file there whose name matches it but for case (Sponza's MTL names
+/// 00_SKAP.JPG for 00_skap.JPG); empty when there is none. Whatever it is (a FIFO, a device),
+/// read_image then refuses it by name rather than this calling it missing.
+fs::path resolve(const fs::path& folder, const std::string& name) {
+    std::error_code ec;
+    const fs::path exact = folder / name;
+    if (fs::exists(exact, ec) && !fs::is_directory(exact, ec)) return exact;
+    // An OBJ named without a folder (`kdray render scene.obj`) has its textures in ".", which
+    // a directory_iterator over "" would not list.
+    const fs::path dir = exact.parent_path().empty() ? fs::path(".") : exact.parent_path();
+    const std::string wanted = lower(exact.filename().string());
+    for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec))
+        if (lower(entry.path().filename().string()) == wanted && !entry.is_directory(ec))
+            return entry.path();
+    return {};
+}
+
+/// The IEC 61966-2-1 decoding of an sRGB value in [0, 1].
+float srgb_decode(float encoded) {
+    return encoded <= 0.04045f ? encoded / 12.92f : std::pow((encoded + 0.055f) / 1.055f, 2.4f);
+}
+
+}  // namespace
+
+int TextureLoader::load(const std::string& material, const std::string& statement,
+                        const std::string& file) {
+    const fs::path path = resolve(folder_, file);
+    auto warn = [&](const std::string& why) {
+        scene_.warnings.push_back(where_ + ": material '" + material + "': " + statement + " '" +
+                                  file + "' " + why + "; it renders untextured");
+        return -1;
+    };
+    if (path.empty())
+        return warn("not found in " +
+                    (folder_.empty() ? std::string("the current directory") : folder_.string()));
+    if (const auto it = loaded_.find(path); it != loaded_.end())
+        return it->second >= 0 ? it->second : warn("cannot be read");
+    DecodedImage image;
+    try {
+        image = read_image(path);
+    } catch (const Error& e) {
+        loaded_[path] = -1;
+        return warn("cannot be read (" + std::string(e.what()) + ")");
+    }
+    const int channels = image.channels;
+    const std::vector<float>& pixels = image.values;
+    // Integer images hold sRGB-encoded values; float images linear ones.
+    const bool srgb = image.integer;
+    // A texel scales Kd, whose values must be finite numbers >= 0 (mtl_prepare.cpp): a float
+    // image's NaN, inf or negative texels flowed into the image, exit 0, without a word.
+    if (!srgb) {
+        const std::size_t count = std::size_t(image.width) * image.height * channels;
+        for (std::size_t i = 0; i < count; ++i)
+            if (const float v = pixels[i]; !(std::isfinite(v) && v >= 0.0f)) {
+                loaded_[path] = -1;
+                const std::size_t pixel = i / channels;
+                return warn("cannot be read (" + path.string() + ": texel (" +
+                            std::to_string(pixel % image.width) + ", " +
+                            std::to_string(pixel / image.width) + ") is " + std::to_string(v) +
+                            ", not a finite number >= 0)");
+            }
+    }
+    KdTexture entry{};
+    entry.offset = kd_u32(scene_.texels.size() / 4);
+    entry.width = kd_u32(image.width);
+    entry.height = kd_u32(image.height);
+    const std::size_t texels = std::size_t(image.width) * image.height;
+    // Each image is within the input budgets, but a scene can name many: the atlas as a whole
+    // stays within the one-input budget and its u32 texel offsets.
+    const std::size_t atlas = scene_.texels.size() / 4 + texels;
+    if (const std::uint64_t limit = input_size_limit();
+        atlas > std::numeric_limits<kd_u32>::max() || 16 * std::uint64_t(atlas) > limit) {
+        loaded_[path] = -1;
+        return warn("cannot be read (" + path.string() + ": the scene's textures would take " +
+                    std::to_string((16 * std::uint64_t(atlas)) >> 20) + " MiB, more than the " +
+                    std::to_string(limit >> 20) + " MiB kdray reads of one input here)");
+    }
+    scene_.texels.reserve(scene_.texels.size() + 4 * texels);
+    for (std::size_t i = 0; i < texels; ++i) {
+        const float* p = &pixels[i * channels];
+        // Grey (and grey-alpha) images give every channel their first.
+        for (int c = 0; c < 3; ++c) {
+            const float v = p[channels >= 3 ? c : 0];
+            scene_.texels.push_back(srgb ? srgb_decode(v) : v);
+        }
+        scene_.texels.push_back(0.0f);
+    }
+    const int id = int(scene_.texture_table.size());
+    scene_.texture_table.push_back(entry);
+    loaded_[path] = id;
+    return id;
+}
+
+}  // namespace kdray
