@@ -243,7 +243,7 @@ TEST_CASE("heat map: viridis at its published end points and middle; the map's s
     for (kd_u32 i = 0; i < 100; ++i) hits.costs.push_back({i + 1, 5});
     hits.costs.push_back({0, 0});
     const std::filesystem::path dir = test::fresh_temp_dir("heatmap");
-    const Heatmap map = encode_heatmap(dir / "h.cost.png", hits, SahCosts{1.0f, 0.0f});
+    const Heatmap map = encode_heatmap(dir / "h.cost.png", hits, 1.0f, 0.0f);
     CHECK(map.scale_cost == 99.0);
     CHECK(map.max_cost == 100.0);
     test::write_text_file(dir / "h.cost.png", map.png);

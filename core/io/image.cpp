@@ -176,15 +176,16 @@ Vec3 heatmap_colour(float x) {
     return {a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2])};
 }
 
-Heatmap encode_heatmap(const fs::path& path, const HitBuffer& hits, SahCosts costs) {
+Heatmap encode_heatmap(const fs::path& path, const HitBuffer& hits, float cost_traversal,
+                       float cost_intersection) {
     check_size(path, hits.width, hits.height, hits.costs.size(), 1, "walk cost buffer");
     if (lower_extension(path) != ".png")
         throw Error("cannot write " + path.string() + ": a heat map is a PNG file (.png)");
     std::vector<double> cost(hits.costs.size()), walked;
     Heatmap out;
     for (std::size_t i = 0; i < cost.size(); ++i) {
-        cost[i] = double(costs.traversal) * hits.costs[i].nodes +
-                  double(costs.intersection) * hits.costs[i].triangles;
+        cost[i] = double(cost_traversal) * hits.costs[i].nodes +
+                  double(cost_intersection) * hits.costs[i].triangles;
         out.max_cost = std::max(out.max_cost, cost[i]);
         if (hits.costs[i].nodes > 0) walked.push_back(cost[i]);
     }

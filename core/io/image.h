@@ -11,7 +11,6 @@
 
 #include "core/device/kd_shared.h"
 #include "core/geometry/math.h"
-#include "core/tree/tree.h"
 
 namespace kdray {
 
@@ -56,16 +55,17 @@ std::string encode_aov(const std::filesystem::path& path, const HitBuffer& hits)
 HitBuffer read_aov(const std::filesystem::path& path);
 
 /// The heat map of `--heatmap`: each pixel's walk cost C_t x nodes + C_i x triangles (the SAH's
-/// own model of a ray's cost, with the tree's `costs`) of hits.costs, divided by `scale_cost` and
-/// coloured by heatmap_colour, as an 8-bit PNG. scale_cost is the 99th percentile of the costs of
-/// the rays that entered the tree (0 when none did): the frame's few costliest rays (grazing a
+/// own model of a ray's cost, with the tree's C_t and C_i) of hits.costs, divided by `scale_cost`
+/// and coloured by heatmap_colour, as an 8-bit PNG. scale_cost is the 99th percentile of the costs
+/// of the rays that entered the tree (0 when none did): the frame's few costliest rays (grazing a
 /// silhouette, along a wall) saturate rather than darken everything else; max_cost is the
 /// largest.
 struct Heatmap {
     std::string png;
     double scale_cost = 0, max_cost = 0;
 };
-Heatmap encode_heatmap(const std::filesystem::path& path, const HitBuffer& hits, SahCosts costs);
+Heatmap encode_heatmap(const std::filesystem::path& path, const HitBuffer& hits,
+                       float cost_traversal, float cost_intersection);
 /// The colour of x in [0, 1] (clamped; NaN is 0): matplotlib's viridis (perceptually uniform,
 /// readable in grey and by colour-blind readers), linear between 9 of its 256 entries, as
 /// sRGB-encoded values in [0, 1].

@@ -98,7 +98,8 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
         std::vector<FileContent> files = {{image_path, image_bytes}};
         if (options_.aov) files.push_back({aov_path, aov_bytes});
         if (options_.heatmap) {
-            heatmap = encode_heatmap(heatmap_path, result.hits, built.tree.params.costs);
+            heatmap = encode_heatmap(heatmap_path, result.hits, built.tree.params.costs.traversal,
+                                     built.tree.params.costs.intersection);
             files.push_back({heatmap_path, heatmap.png});
         }
         write_files_atomically(files);
