@@ -1,6 +1,7 @@
-/* kd_traverse.h — the ray–triangle test and the kd-tree walk, written once in the C subset that
- * compiles both as C++ (the reference tracer, the brute-force oracle) and as OpenCL C (the trace
- * kernels). Sharing the code is what makes the OpenCL tracer's hits identical to the reference's.
+/* kd_traverse.h — the kd-tree walk (the triangle tests it calls are in kd_intersect.h and
+ * kd_intersect_moller.h), written once in the C subset that compiles both as C++ (the reference
+ * tracer, the brute-force oracle) and as OpenCL C (the trace kernels). Sharing the code is what
+ * makes the OpenCL tracer's hits identical to the reference's.
  *
  * Pointers into tree and triangle buffers carry KDRAY_GLOBAL (OpenCL's __global, nothing in C++);
  * unqualified pointers are private/host memory.
