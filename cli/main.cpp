@@ -221,7 +221,7 @@ int main(int argc, char** argv) {
     render_app
         ->add_option("--ray-depth", render.ray_depth,
                      "most bounces of a path: the render file's max_depth (overrides it)")
-        ->check(CLI::Range(1, 1024));
+        ->check(CLI::Range(1, KDRAY_MAX_BOUNCES));
     render_app->add_option("--exposure", render.exposure,
                            "in stops: radiance x 2^STOPS before the image is written, from -64 to "
                            "64 (overrides the render file)");
@@ -352,6 +352,18 @@ int main(int argc, char** argv) {
                          "--help)\n";
             return 2;
         }
+
+    // `build -o ""` exited 0 having written nothing, and `render -o ""` blamed a folder named "".
+    if (build_app->count("--output") > 0 && build.output.empty()) {
+        std::cerr << "kdray: error: build -o/--output: the tree file's name is empty (see kdray "
+                     "--help)\n";
+        return 2;
+    }
+    if (*render_app && render.output_dir.empty()) {
+        std::cerr << "kdray: error: render -o/--output: the output folder's name is empty (see "
+                     "kdray --help)\n";
+        return 2;
+    }
 
     // CLI11's checks let nan through (every comparison with it is false) and a float option
     // overflows to inf: the one parameter check decides, as a usage error.

@@ -55,7 +55,7 @@ GOOD = [
                                         {"type": "directional", "direction": None,
                                          "irradiance": None}]}),
     ("ambient grey", {"ambient": 0.25}),
-    ("limits", {"image": {"width": 1, "height": 65536, "spp": 65536}, "max_depth": 1024,
+    ("limits", {"image": {"width": 1, "height": 65536, "spp": 65536}, "max_depth": 16,
                 "exposure": -64}),
     ("limits 2", {"image": {"width": 65536, "height": 1, "spp": 1}, "max_depth": 1,
                   "exposure": 64}),
@@ -129,7 +129,7 @@ BAD_OBJECTS = [
     ("exposure too low", {"exposure": -65}),
     ("exposure a string", {"exposure": "1"}),
     ("max_depth 0", {"max_depth": 0}),
-    ("max_depth too large", {"max_depth": 1025}),
+    ("max_depth too large", {"max_depth": 17}),
     ("max_depth real", {"max_depth": 2.5}),
     ("$schema not a string", {"$schema": 1}),
 ]

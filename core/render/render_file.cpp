@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/device/kd_shared.h"
 #include "core/error.h"
 #include "core/io/input_file.h"
 #include "core/render/camera.h"
@@ -31,7 +32,6 @@ using nlohmann::json;
 /// Sane upper bounds: larger values are typos, and would ask for absurd amounts of memory.
 constexpr long long kMaxImageSize = 65536;
 constexpr long long kMaxSpp = 65536;
-constexpr long long kMaxDepth = 1024;
 
 bool finite(const Vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
@@ -174,8 +174,11 @@ class RenderFileParser {
             else
                 fail("display", "must be \"clamp\" or \"filmic\"");
         }
+        // The renderer's pending-ray stack holds KDRAY_MAX_BOUNCES rays: a deeper max_depth was
+        // clamped to it without a word while stats.json recorded the value asked for.
         if (present(root, "max_depth"))
-            settings.max_depth = integer(root["max_depth"], "max_depth", 1, kMaxDepth);
+            settings.max_depth = integer(root["max_depth"], "max_depth", 1, KDRAY_MAX_BOUNCES,
+                                         "the most bounces kdray's renderer follows");
         return settings;
     }
 
@@ -220,7 +223,9 @@ class RenderFileParser {
         return static_cast<float>(real(value, path));
     }
 
-    int integer(const json& value, const std::string& path, long long lo, long long hi) const {
+    /// `why_hi`, when given, says in the message why `hi` is the limit.
+    int integer(const json& value, const std::string& path, long long lo, long long hi,
+                const char* why_hi = nullptr) const {
         if (!value.is_number_integer()) fail(path, "must be an integer");
         // Unsigned values above int64's range read as huge; compare as signed when they fit.
         const bool too_big =
@@ -231,7 +236,8 @@ class RenderFileParser {
             too_big ? std::numeric_limits<long long>::max() : value.get<long long>();
         if (v < lo || v > hi)
             fail(path, "must be between " + std::to_string(lo) + " and " + std::to_string(hi) +
-                           " (is " + value.dump() + ")");
+                           " (is " + value.dump() + ")" +
+                           (why_hi ? ": " + std::to_string(hi) + " is " + why_hi : ""));
         return static_cast<int>(v);
     }
 

@@ -19,6 +19,7 @@
 #include <set>
 #include <streambuf>
 #include <string_view>
+#include <tuple>
 
 #include "core/error.h"
 #include "core/io/input_file.h"
@@ -205,6 +206,40 @@ void warn_unsimulated(const tinyobj::material_t& m, const Material& material,
     };
     for (const auto& map : maps)
         if (!map.name.empty()) warn(std::string(map.statement) + " '" + map.name + "'", map.what);
+    // The texture lookup reads a map at the hit's vt as it is: `map_Kd -s 4 4 1 tex.png` (tiled)
+    // rendered unscaled without a word. tinyobjloader parses the options; any not at its default
+    // is named, once per map.
+    for (const auto& [texname, texopt, statement] :
+         {std::tuple{&m.diffuse_texname, &m.diffuse_texopt, "map_Kd"},
+          std::tuple{&m.ambient_texname, &m.ambient_texopt, "map_Ka"}}) {
+        if (texname->empty()) continue;
+        const tinyobj::texture_option_t& o = *texopt;
+        auto g = [](double v) {
+            char text[32];
+            std::snprintf(text, sizeof text, "%g", v);
+            return std::string(text);
+        };
+        auto three = [&](const tinyobj::real_t* v) {
+            return g(v[0]) + " " + g(v[1]) + " " + g(v[2]);
+        };
+        std::string options;
+        auto add = [&](bool set, const std::string& option) {
+            if (set) options += (options.empty() ? "" : ", ") + option;
+        };
+        add(o.scale[0] != 1 || o.scale[1] != 1 || o.scale[2] != 1, "-s " + three(o.scale));
+        add(o.origin_offset[0] != 0 || o.origin_offset[1] != 0 || o.origin_offset[2] != 0,
+            "-o " + three(o.origin_offset));
+        add(o.turbulence[0] != 0 || o.turbulence[1] != 0 || o.turbulence[2] != 0,
+            "-t " + three(o.turbulence));
+        add(o.clamp, "-clamp on");
+        add(o.brightness != 0 || o.contrast != 1, "-mm " + g(o.brightness) + " " + g(o.contrast));
+        add(!o.blendu, "-blendu off");
+        add(!o.blendv, "-blendv off");
+        add(o.sharpness != 1, "-boost " + g(o.sharpness));
+        if (!options.empty())
+            warn(std::string(statement) + " '" + *texname + "' option " + options,
+                 "the texture renders as if the option were not given");
+    }
     const struct {
         tinyobj::real_t value;
         const char* statement;
