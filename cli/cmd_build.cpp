@@ -7,6 +7,7 @@
 #include "cl/backends.h"
 #include "cl/runtime/program_cache.h"
 #include "cli/commands.h"
+#include "cli/log.h"
 #include "cli/report.h"
 #include "core/run/frame_pipeline.h"
 #include "core/run/stats_json.h"
@@ -53,10 +54,8 @@ int run_build(const BuildCommand& command) {
     if (command.json) {
         std::cout << json_text(report) << "\n";
     } else {
-        for (const std::string& warning : scene.warnings)
-            std::cerr << "kdray: warning: " << warning << "\n";
-        for (const std::string& warning : built.report.warnings)
-            std::cerr << "kdray: warning: " << warning << "\n";
+        for (const std::string& warning : scene.warnings) print_warning(warning);
+        for (const std::string& warning : built.report.warnings) print_warning(warning);
         nlohmann::json table = {{"scene", report["scene"]}, {"tree", report}};
         table["tree"].erase("scene");
         print_table(std::cout, table);

@@ -4,8 +4,10 @@
 #include <cmath>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "cli/commands.h"
+#include "cli/log.h"
 #include "core/error.h"
 #include "core/io/image.h"
 #include "core/io/image_codec.h"
@@ -77,10 +79,13 @@ int run_compare(const CompareCommand& command) {
             if (key != "a" && key != "b" && key != "kind" && key != "agree")
                 std::cout << "  " << key << " " << value.dump() << "\n";
     }
-    if (!agree)
-        std::cerr << "kdray: error: " << command.a << " and " << command.b
-                  << " disagree: " << (aovs ? "mismatch_fraction " : "fraction_over ") << fraction
-                  << " > " << max_fraction << "\n";
+    if (!agree) {
+        std::ostringstream message;
+        message << command.a << " and " << command.b
+                << " disagree: " << (aovs ? "mismatch_fraction " : "fraction_over ") << fraction
+                << " > " << max_fraction;
+        print_error(message.str());
+    }
     return agree ? 0 : 1;
 }
 

@@ -266,13 +266,14 @@ int run_render(const RenderCommand& command) {
 
     const RenderRunOutcome outcome = run.run(*builder, *tracer);
     if (outcome.interrupted) {
-        std::cerr << "kdray: interrupted: " << outcome.rendered << " frame(s) complete in "
-                  << command.output_dir << "\n";
+        print_message("kdray: interrupted: ", std::to_string(outcome.rendered) +
+                                                  " frame(s) complete in " + command.output_dir);
         return 130;
     }
     if (outcome.failed > 0) {
-        std::cerr << "kdray: " << outcome.failed << " of " << outcome.frames << " frame(s) failed"
-                  << (command.keep_going ? "" : "; stopped at the first") << "\n";
+        print_message("kdray: ", std::to_string(outcome.failed) + " of " +
+                                     std::to_string(outcome.frames) + " frame(s) failed" +
+                                     (command.keep_going ? "" : "; stopped at the first"));
         return 1;
     }
     return 0;

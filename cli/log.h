@@ -4,10 +4,28 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include <spdlog/spdlog.h>
 
 namespace kdray::cli {
+
+/// `text` made one bounded, printable line: control characters (C0 and DEL, C1 in UTF-8, and bytes
+/// that are not UTF-8) written as escapes (\n, \r, \t, \x1b), a quoted value ('...') cut after
+/// 200 bytes and the whole after 4096, each with "...". Messages quote what files say: a render
+/// file's key holding "\nkdray: error: ..." or an ANSI escape forged lines and recoloured the
+/// terminal, and a 30 MB string gave a 30 MB line.
+std::string printable(std::string_view text);
+
+/// Prints `prefix` ("kdray: error: ") and printable(text) as one line on stderr, around the
+/// progress line. Every message kdray prints goes through here, spdlog's included.
+void print_message(const char* prefix, std::string_view text);
+inline void print_error(std::string_view text) {
+    print_message("kdray: error: ", text);
+}
+inline void print_warning(std::string_view text) {
+    print_message("kdray: warning: ", text);
+}
 
 /// Makes spdlog's default logger kdray's stderr logger at `level`, one of --log-level's: quiet
 /// (warnings and errors only), info or debug. Safe to call again: main sets info before it parses

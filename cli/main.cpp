@@ -337,8 +337,7 @@ int main(int argc, char** argv) {
                             !near.empty())
                             hint = "unknown option '" + arg + "'" + near;
                 }
-        std::cerr << "kdray: error: " << (hint.empty() ? std::string(e.what()) : hint)
-                  << " (see kdray --help)\n";
+        print_error((hint.empty() ? std::string(e.what()) : hint) + " (see kdray --help)");
         return 2;
     }
 
@@ -347,21 +346,19 @@ int main(int argc, char** argv) {
 
     for (const BuilderOptions* o : {&build.builder, &render.builder, &stats.builder})
         if (!o->retired_max_depth.empty()) {
-            std::cerr << "kdray: error: --max-depth is gone: --tree-depth sets the kd-tree's depth "
-                         "limit; on render, --ray-depth the render file's max_depth (see kdray "
-                         "--help)\n";
+            print_error(
+                "--max-depth is gone: --tree-depth sets the kd-tree's depth limit; on "
+                "render, --ray-depth the render file's max_depth (see kdray --help)");
             return 2;
         }
 
     // `build -o ""` exited 0 having written nothing, and `render -o ""` blamed a folder named "".
     if (build_app->count("--output") > 0 && build.output.empty()) {
-        std::cerr << "kdray: error: build -o/--output: the tree file's name is empty (see kdray "
-                     "--help)\n";
+        print_error("build -o/--output: the tree file's name is empty (see kdray --help)");
         return 2;
     }
     if (*render_app && render.output_dir.empty()) {
-        std::cerr << "kdray: error: render -o/--output: the output folder's name is empty (see "
-                     "kdray --help)\n";
+        print_error("render -o/--output: the output folder's name is empty (see kdray --help)");
         return 2;
     }
 
@@ -371,7 +368,7 @@ int main(int argc, char** argv) {
         for (const BuilderOptions* o : {&build.builder, &render.builder, &stats.builder})
             kdray::validate_build_params(o->build_params(kdray::kStaticBuildQuality));
     } catch (const kdray::Error& e) {
-        std::cerr << "kdray: error: " << e.what() << " (see kdray --help)\n";
+        print_error(std::string(e.what()) + " (see kdray --help)");
         return 2;
     }
 
@@ -384,16 +381,16 @@ int main(int argc, char** argv) {
         finish_stdout();
         return status;
     } catch (const kdray::UsageError& e) {
-        std::cerr << "kdray: error: " << e.what() << "\n";
+        print_error(e.what());
         return 2;
     } catch (const kdray::Error& e) {
-        std::cerr << "kdray: error: " << e.what() << "\n";
+        print_error(e.what());
         return 1;
     } catch (const std::bad_alloc&) {
-        std::cerr << "kdray: error: out of host memory\n";
+        print_error("out of host memory");
         return 1;
     } catch (const std::exception& e) {
-        std::cerr << "kdray: error: " << e.what() << "\n";
+        print_error(e.what());
         return 1;
     }
     return 0;
