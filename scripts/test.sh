@@ -7,8 +7,9 @@
 #   scripts/test.sh --sanitize   ASan + UBSan build in build-asan/, the unit and CLI tests (the
 #                                Embree comparisons, the accuracy sweep and the device bundle,
 #                                whose kdray is a Release build anyway, the checks of docs,
-#                                packaging and scripts, and the Oclgrind runs, whose simulator
-#                                does not load into a sanitized process, are left to the first)
+#                                packaging and scripts, the GPU-target compile check (clang, not
+#                                kdray), and the Oclgrind runs, whose simulator does not load into
+#                                a sanitized process, are left to the first)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 exclude=()
@@ -20,7 +21,7 @@ if [[ "${1:-}" == "--sanitize" ]]; then
     # -O1 -g1: line tables for the reports, at a fraction of a full debug build's compile time.
     scripts/build.sh -DKDRAY_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
         -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" "$@"
-    exclude=(-E "embree_agreement|accuracy_vs_time|device_bundle_smoke|docs_figures|install|render_file_schema|slurm_render|oclgrind")
+    exclude=(-E "embree_agreement|accuracy_vs_time|device_bundle_smoke|docs_figures|install|render_file_schema|slurm_render|oclgrind|gpu_compile|rooms")
     # Two tests at a time, as the Release run. The sanitizer run once went one at a time: with a
     # cold PoCL kernel cache LeakSanitizer's exit-time tracer crashed (SIGSEGV) in 3 of 4 runs.
     # It runs after the Release run, whose kernels fill the shared cache below, and warm it has
