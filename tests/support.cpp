@@ -1,5 +1,6 @@
 #include "tests/support.h"
 
+#include <algorithm>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -387,6 +388,19 @@ std::filesystem::path write_obj(const std::filesystem::path& path, const Scene& 
 
 std::filesystem::path shared_dir() {
     return source_dir() / ".." / "shared";
+}
+
+void check_error(const CommandResult& r, int status, std::initializer_list<std::string> mentions) {
+    INFO("status " << r.status << ", stderr: " << r.err);
+    CHECK(r.status == status);
+    CHECK(r.err.rfind("kdray: error: ", 0) == 0);
+    CHECK(line_count(r.err) == 1);
+    CHECK((!r.err.empty() && r.err.back() == '\n'));
+    for (const std::string& m : mentions) CHECK_MESSAGE(r.err.find(m) != std::string::npos, m);
+}
+
+std::size_t line_count(const std::string& text) {
+    return std::size_t(std::count(text.begin(), text.end(), '\n'));
 }
 
 }  // namespace kdray::test

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <vector>
@@ -107,6 +108,11 @@ struct CommandResult {
     int status = -1;
     std::string out, err;
 };
+/// Checks the README's promise for bad input: exit `status` and one `kdray: error:` line on stderr,
+/// ending in a newline, that mentions each of `mentions`.
+void check_error(const CommandResult& r, int status, std::initializer_list<std::string> mentions);
+/// The number of lines (newline characters) in `text`.
+std::size_t line_count(const std::string& text);
 /// Runs the kdray binary built beside the tests with `args` (no shell expansion of them). With
 /// `timeout_s` > 0 a run that outlasts it is killed (status 137): a test of a hang fails, not
 /// hangs.

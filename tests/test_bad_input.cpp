@@ -44,15 +44,6 @@ void check_nothing_written(const fs::path& out) {
 
 /// Exit status `status` and stderr exactly one line "kdray: error: ..." holding every one of
 /// `mentions` (the file, the field, the problem).
-void check_error(const CommandResult& r, int status, std::initializer_list<std::string> mentions) {
-    INFO("stderr: " << r.err);
-    CHECK(r.status == status);
-    CHECK(r.err.rfind("kdray: error: ", 0) == 0);
-    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
-    CHECK((!r.err.empty() && r.err.back() == '\n'));
-    for (const std::string& m : mentions) CHECK_MESSAGE(r.err.find(m) != std::string::npos, m);
-}
-
 /// `kdray render OBJ -o OUT [--camera RENDER] ...` with the reference builder and tracer.
 CommandResult render(const fs::path& obj, const fs::path& out, const fs::path& camera = {},
                      std::vector<std::string> extra = {}) {

@@ -35,14 +35,6 @@ const char* kSmallRender =
 // Runs that should end at once get 30 s: a hang fails the test instead of stalling CI.
 constexpr int kNoHang = 30;
 
-void check_error(const CommandResult& r, int status, std::initializer_list<std::string> mentions) {
-    INFO("status " << r.status << ", stderr: " << r.err);
-    CHECK(r.status == status);
-    CHECK(r.err.rfind("kdray: error: ", 0) == 0);
-    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
-    for (const std::string& m : mentions) CHECK_MESSAGE(r.err.find(m) != std::string::npos, m);
-}
-
 CommandResult render(const fs::path& obj, const fs::path& out, const fs::path& camera,
                      std::vector<std::string> extra = {}) {
     std::vector<std::string> args = {"render",   obj.string(),    "-o",        out.string(),

@@ -28,14 +28,6 @@ namespace {
 // Runs that should end at once get 60 s: a hang fails the test instead of stalling CI.
 constexpr int kNoHang = 60;
 
-void check_error(const CommandResult& r, int status, std::initializer_list<std::string> mentions) {
-    INFO("status " << r.status << ", stderr: " << r.err);
-    CHECK(r.status == status);
-    CHECK(r.err.rfind("kdray: error: ", 0) == 0);
-    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
-    for (const std::string& m : mentions) CHECK_MESSAGE(r.err.find(m) != std::string::npos, m);
-}
-
 /// A unit quad facing +z with material `t` (Kd 1, map_Kd tex.png, a 2x2 texture) whose four
 /// corners have the texture coordinate `uv` ("" for none), and a 16x12 camera on it.
 struct TexturedQuad {

@@ -19,18 +19,6 @@ namespace {
 // Runs that should end at once get 60 s: a hang fails the test instead of stalling CI.
 constexpr int kNoHang = 60;
 
-std::size_t lines(const std::string& text) {
-    return std::size_t(std::count(text.begin(), text.end(), '\n'));
-}
-
-void check_error(const CommandResult& r, int status, std::initializer_list<std::string> mentions) {
-    INFO("status " << r.status << ", stderr: " << r.err);
-    CHECK(r.status == status);
-    CHECK(r.err.rfind("kdray: error: ", 0) == 0);
-    CHECK(lines(r.err) == 1);
-    for (const std::string& m : mentions) CHECK_MESSAGE(r.err.find(m) != std::string::npos, m);
-}
-
 /// A unit quad facing +z with material `t` whose MTL says `map_kd` (a 2x2 tex.png beside it),
 /// and a 16x12 camera on it with `render_extra` added to the render file's top level.
 struct Quad {
@@ -122,7 +110,7 @@ TEST_CASE("map_Kd options kdray does not simulate are named in one warning") {
         INFO("stderr: " << r.err);
         CHECK(r.status == 0);
         CHECK(r.err.rfind("kdray: warning: ", 0) == 0);
-        CHECK(lines(r.err) == 1);
+        CHECK(line_count(r.err) == 1);
         for (const std::string& m : c.mentions)
             CHECK_MESSAGE(r.err.find(m) != std::string::npos, m);
         fs::remove_all(q.dir);

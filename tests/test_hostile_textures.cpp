@@ -30,10 +30,6 @@ namespace {
 // Runs that should end at once get 60 s: a hang fails the test instead of stalling CI.
 constexpr int kNoHang = 60;
 
-std::size_t lines(const std::string& text) {
-    return std::size_t(std::count(text.begin(), text.end(), '\n'));
-}
-
 /// A unit quad with material `t` (Kd 0.5 0.7 0.9, map_Kd tex.png) seen by a 16x12 camera, and the
 /// same quad whose material has no map_Kd: what a texture that cannot be read must render as.
 struct Scenes {
@@ -117,7 +113,7 @@ TEST_CASE(
         INFO("stderr: " << r.err);
         CHECK(r.status == 0);
         CHECK(r.err.rfind("kdray: warning: ", 0) == 0);
-        CHECK(lines(r.err) == 1);
+        CHECK(line_count(r.err) == 1);
         CHECK(r.err.find((s.dir / "tex.png").string()) != std::string::npos);
         CHECK(r.err.find(reason(kind)) != std::string::npos);
         CHECK(r.err.find("renders untextured") != std::string::npos);
@@ -165,7 +161,7 @@ TEST_CASE("compare reads its images under the input budgets: an error naming the
                 INFO("stderr: " << r.err);
                 CHECK(r.status == 1);
                 CHECK(r.err.rfind("kdray: error: ", 0) == 0);
-                CHECK(lines(r.err) == 1);
+                CHECK(line_count(r.err) == 1);
                 CHECK(r.err.find(bad.string()) != std::string::npos);
                 CHECK(r.err.find(reason(kind)) != std::string::npos);
             }
@@ -201,7 +197,7 @@ TEST_CASE("a float texture's texels must be finite and >= 0, as Kd values are") 
         INFO("stderr: " << r.err);
         CHECK(r.status == 0);
         CHECK(r.err.rfind("kdray: warning: ", 0) == 0);
-        CHECK(lines(r.err) == 1);
+        CHECK(line_count(r.err) == 1);
         CHECK(r.err.find((s.dir / "tex.exr").string() + ": texel (1, 1)") != std::string::npos);
         CHECK(r.err.find("not a finite number >= 0") != std::string::npos);
         CHECK(read_file(out / "textured.png") == expected);
