@@ -22,6 +22,7 @@
 #include "core/render/render_file.h"
 #include "core/render/render_setup.h"
 #include "core/tree/reference_builder.h"
+#include "tests/needle_distances.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
 
@@ -48,21 +49,6 @@ Camera skew_camera(const Scene& scene) {
     c.position = centre + Vec3{0.9f * r, 0.7f * r, 1.6f * r};
     c.fov_y = 50.0f;
     return c;
-}
-
-/// n.(p0 - o) / n.d in long double from the same float corners and ray.
-long double exact_plane_distance(const Scene& scene, kd_u32 prim, const KdRay& ray) {
-    using L = long double;
-    const float* p = &scene.triangles[std::size_t(prim) * KDRAY_FLOATS_PER_TRIANGLE];
-    L e1[3], e2[3], n[3], to_plane = 0, along = 0;
-    for (int a = 0; a < 3; ++a) e1[a] = L(p[3 + a]) - p[a], e2[a] = L(p[6 + a]) - p[a];
-    for (int a = 0; a < 3; ++a)
-        n[a] = e1[(a + 1) % 3] * e2[(a + 2) % 3] - e1[(a + 2) % 3] * e2[(a + 1) % 3];
-    for (int a = 0; a < 3; ++a) {
-        to_plane += n[a] * (L(p[a]) - ray.org[a]);
-        along += n[a] * ray.dir[a];
-    }
-    return to_plane / along;
 }
 
 const char* kSmallRender = R"({
@@ -132,38 +118,7 @@ TEST_CASE("opencl float-float: needle distances within 4 ulps, one ray at a time
     // (the float t kept), 18 pixels hit another triangle and distances were off by thousands of
     // ulps.
     ForceNoFp64 force;
-    const Scene scene = test::needle_bundle(300, 6);
-    const KdTree tree = build_reference(scene);
-    RenderSettings settings;
-    settings.width = 96;
-    settings.height = 72;
-    for (RenderInputs::Packets packets : {RenderInputs::Packets::Off, RenderInputs::Packets::On}) {
-        CAPTURE(packets == RenderInputs::Packets::On);
-        RenderInputs inputs = prepare_render(scene, settings, test::needle_bundle_camera(), 0);
-        inputs.packets = packets;
-        const FrameResult device = render_opencl(test::opencl_test_device(), tree, scene, inputs);
-        int hits = 0, other_triangle = 0;
-        double worst_ulps = 0;
-        for (int y = 0; y < settings.height; ++y)
-            for (int x = 0; x < settings.width; ++x) {
-                const KdHit& got = device.hits.hits[std::size_t(y) * settings.width + x];
-                KdRay ray;
-                kd_camera_ray(&inputs.view, float(x) + 0.5f, float(y) + 0.5f, &ray);
-                const KdHit want = test::brute_force_closest(scene, ray);
-                other_triangle += got.prim != want.prim;
-                if (want.prim == KDRAY_NO_HIT || got.prim != want.prim) continue;
-                ++hits;
-                const long double exact = exact_plane_distance(scene, got.prim, ray);
-                const float nearest = float(exact);
-                const float ulp = std::nextafter(nearest, INFINITY) - nearest;
-                worst_ulps = std::max(worst_ulps, double(std::fabs(got.t - exact) / ulp));
-            }
-        CAPTURE(hits);
-        CHECK(hits > 200);
-        CHECK(other_triangle == 0);
-        CAPTURE(worst_ulps);
-        CHECK(worst_ulps <= 4);
-    }
+    test::check_needle_distances();
 }
 
 TEST_CASE("opencl float-float: kdray render says which path ran, in its log and in stats.json") {

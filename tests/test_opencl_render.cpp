@@ -21,6 +21,7 @@
 #include "core/render/render_setup.h"
 #include "core/tree/reference_builder.h"
 #include "tests/support.h"
+#include "tests/needle_distances.h"
 #include "tests/test_opencl_fixture.h"
 
 using namespace kdray;
@@ -345,36 +346,6 @@ TEST_CASE("opencl render: packets of primary rays give the reference's hits bit 
     }
 }
 
-namespace {
-
-/// The exact distance along `ray` to the plane of triangle `prim`, in long double from the same
-/// float corners and ray: n.(p0 - o) / n.d with n from the edges (test_intersect.cpp's needle
-/// test does the same).
-long double exact_plane_distance(const Scene& scene, kd_u32 prim, const KdRay& ray) {
-    using L = long double;
-    const float* p = &scene.triangles[std::size_t(prim) * KDRAY_FLOATS_PER_TRIANGLE];
-    L e1[3], e2[3], n[3], to_plane = 0, along = 0;
-    for (int a = 0; a < 3; ++a) e1[a] = L(p[3 + a]) - p[a], e2[a] = L(p[6 + a]) - p[a];
-    for (int a = 0; a < 3; ++a) {
-        const int b = (a + 1) % 3, c = (a + 2) % 3;
-        n[a] = e1[b] * e2[c] - e1[c] * e2[b];
-    }
-    for (int a = 0; a < 3; ++a) {
-        to_plane += n[a] * (L(p[a]) - ray.org[a]);
-        along += n[a] * ray.dir[a];
-    }
-    return to_plane / along;
-}
-
-/// |t - exact| in float ulps at `exact`.
-double ulps_from(float t, long double exact) {
-    const float nearest = float(exact);
-    const float ulp = std::nextafter(nearest, INFINITY) - nearest;
-    return double(std::fabs(static_cast<long double>(t) - exact) / ulp);
-}
-
-}  // namespace
-
 TEST_CASE("opencl render: distances on needles within 4 ulps, one ray at a time and in packets") {
     // Needles 1e4 long and 1e-3 wide seen along their length from 1.6 away
     // (test::needle_bundle_camera): there the watertight test's float t is off by up to 1.5e-4
@@ -386,34 +357,7 @@ TEST_CASE("opencl render: distances on needles within 4 ulps, one ray at a time 
     // With the refinement off on the device (KDRAY_T_REFINE_CONDITION 1e30 in OpenCL C), 18 of
     // these pixels hit another triangle than brute force and distances were off by thousands of
     // units, on both paths; off in packet_traverse.cl alone, in packets only.
-    const Scene scene = test::needle_bundle(300, 6);
-    const KdTree tree = build_reference(scene);
-    const RenderSettings settings = small_settings(96, 72);
-    for (RenderInputs::Packets packets : {RenderInputs::Packets::Off, RenderInputs::Packets::On}) {
-        CAPTURE(packets == RenderInputs::Packets::On);
-        RenderInputs inputs = prepare_render(scene, settings, test::needle_bundle_camera(), 0);
-        inputs.packets = packets;
-        const FrameResult device = render_opencl(test::opencl_test_device(), tree, scene, inputs);
-        int hits = 0, other_triangle = 0;
-        double worst_ulps = 0;
-        for (int y = 0; y < settings.height; ++y)
-            for (int x = 0; x < settings.width; ++x) {
-                const KdHit& got = device.hits.hits[std::size_t(y) * settings.width + x];
-                KdRay ray;
-                kd_camera_ray(&inputs.view, float(x) + 0.5f, float(y) + 0.5f, &ray);
-                const KdHit want = test::brute_force_closest(scene, ray);
-                other_triangle += got.prim != want.prim;
-                if (want.prim == KDRAY_NO_HIT || got.prim != want.prim) continue;
-                ++hits;
-                worst_ulps = std::max(worst_ulps,
-                                      ulps_from(got.t, exact_plane_distance(scene, got.prim, ray)));
-            }
-        CAPTURE(hits);
-        CHECK(hits > 200);
-        CHECK(other_triangle == 0);
-        CAPTURE(worst_ulps);
-        CHECK(worst_ulps <= 4);
-    }
+    test::check_needle_distances();
 }
 
 TEST_CASE("opencl render: packets whose lanes walk a node's children in opposite orders") {
