@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "cl/runtime/cl_error.h"
+#include "cl/runtime/work_group.h"
 #include "cl/runtime/program_cache.h"
 #include "core/error.h"
 
@@ -290,6 +291,16 @@ void ClDevice::launch(cl::Kernel& kernel, const cl::NDRange& global, const cl::N
     queue_.enqueueNDRangeKernel(kernel, cl::NullRange, global, local);
 }
 
+std::size_t ClDevice::group_1d(cl::Kernel& kernel, std::size_t preferred) {
+    const auto key = std::make_pair(kernel(), preferred);
+    const auto found = group_1d_.find(key);
+    if (found != group_1d_.end()) return found->second.group;
+    const std::size_t group = choose_group_1d(kernel.getInfo<CL_KERNEL_FUNCTION_NAME>(),
+                                              query_kernel_limits(kernel, device_()), preferred);
+    group_1d_.emplace(key, Group1d{kernel, group});
+    return group;
+}
+
 std::vector<std::string> ClDevice::live_buffers() const {
     const std::lock_guard<std::mutex> lock(ledger_->mutex);
     std::vector<std::string> names;
@@ -298,6 +309,7 @@ std::vector<std::string> ClDevice::live_buffers() const {
 }
 
 ClDevice::~ClDevice() {
+    group_1d_.clear();       // kernels, released with the programs (before thread-local exit)
     program_cache_.reset();  // its kernels may hold the last references to buffers
     buffer_pool_.clear();
 #ifdef KDRAY_SANITIZE

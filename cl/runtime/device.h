@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -115,6 +116,10 @@ class ClDevice {
     /// Enqueues `kernel` (its arguments already set) over `global` items in groups of `local`,
     /// counted in traffic().launches; errors are the caller's (cl::Error).
     void launch(cl::Kernel& kernel, const cl::NDRange& global, const cl::NDRange& local);
+    /// The work-group size of a 1D launch of `kernel` that prefers `preferred` (choose_group_1d
+    /// over the kernel's limits), queried once per kernel: a build makes ~700 launches of a few
+    /// dozen kernels, and the query is five driver calls.
+    std::size_t group_1d(cl::Kernel& kernel, std::size_t preferred);
     const DeviceTraffic& traffic() const { return traffic_; }
 
     /// Buffers kept for the next build: at most an eighth of the device's memory, and 1 GiB.
@@ -125,6 +130,12 @@ class ClDevice {
     ProgramCache& program_cache() const { return *program_cache_; }
 
   private:
+    /// group_1d's answers; each keeps its kernel, so that no other kernel takes its handle.
+    struct Group1d {
+        cl::Kernel kernel;
+        std::size_t group;
+    };
+    std::map<std::pair<cl_kernel, std::size_t>, Group1d> group_1d_;
     cl::Device device_;
     cl::Context context_;
     cl::CommandQueue queue_;

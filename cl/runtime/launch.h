@@ -41,10 +41,7 @@ void enqueue_kernel(ClDevice& device, cl::Kernel& kernel, std::size_t count, con
         set_kernel_args(kernel, args...);
         const std::size_t global =
             (count + KDRAY_LAUNCH_GROUP - 1) / KDRAY_LAUNCH_GROUP * KDRAY_LAUNCH_GROUP;
-        const std::size_t group = choose_group_1d(
-            kernel.getInfo<CL_KERNEL_FUNCTION_NAME>(),
-            query_kernel_limits(kernel, device.queue().getInfo<CL_QUEUE_DEVICE>()()),
-            KDRAY_LAUNCH_GROUP);
+        const std::size_t group = device.group_1d(kernel, KDRAY_LAUNCH_GROUP);
         device.launch(kernel, cl::NDRange(global), cl::NDRange(group));
     } catch (const cl::Error& e) {
         throw_cl_error("running kernel " + kernel.getInfo<CL_KERNEL_FUNCTION_NAME>() + " over " +
