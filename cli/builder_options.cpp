@@ -11,6 +11,7 @@ BuildParams BuilderOptions::build_params(BuildQuality default_quality) const {
     if (small_leaf_refs) p.small_leaf_refs = *small_leaf_refs;
     // main.cpp's --small-stage check admits only small_stage_name's names.
     p.small_stage = parse_small_stage(small_stage).value_or(SmallStage::Auto);
+    p.large_stage = parse_large_stage(large_stage).value_or(LargeStage::Auto);
     return p;
 }
 

@@ -20,6 +20,7 @@ struct BuilderOptions {
     // Set by the user apart from the quality (--large-bins, --reclip-refs, --leaf-refs).
     std::optional<int> large_split_bins, small_reclip_refs, small_leaf_refs;
     std::string small_stage = "auto";  // --small-stage: small_stage_name's names (main.cpp checks)
+    std::string large_stage = "auto";  // --large-stage: large_stage_name's names (main.cpp checks)
     std::string retired_max_depth;     // `--max-depth`, refused by its check (main.cpp)
 
     /// params at `quality` (default_quality when none was given), with the ladder options the

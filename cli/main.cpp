@@ -98,6 +98,13 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
                    "(per-level on a GPU, else per-root)")
         ->check(CLI::IsMember({"auto", "per-root", "per-level"}))
         ->capture_default_str();
+    app.add_option("--large-stage", o.large_stage,
+                   "OpenCL builder: how the large-node stage runs, for the same tree: chunked (a "
+                   "work-item walks 256 references of a node in order; CPU devices), level "
+                   "(Zhou et al.'s shape: a work-item per reference, a work-group per 256; GPUs), "
+                   "or auto (level on a GPU, else chunked)")
+        ->check(CLI::IsMember({"auto", "chunked", "level"}))
+        ->capture_default_str();
     app.add_option("--tree-depth", o.params.max_depth, "deepest kd-tree level")
         ->check(CLI::Range(1, KDRAY_MAX_DEPTH))
         ->capture_default_str();

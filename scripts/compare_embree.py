@@ -12,6 +12,7 @@ only when ../shared itself is absent, so that CTest reports a skip.
 
   scripts/compare_embree.py --kdray build/kdray [--builder reference] [--tracer reference]
       [--quality low,medium,high] [--small-stage auto|per-root|per-level]
+      [--large-stage auto|chunked|level]
                             [--quick] [--peer PATH]
 """
 import argparse
@@ -73,6 +74,9 @@ def main():
     parser.add_argument("--small-stage", default="",
                         help="OpenCL builder: the small stage's shape (default: kdray's auto); "
                              "a scene whose stats.json names another shape fails")
+    parser.add_argument("--large-stage", default="",
+                        help="OpenCL builder: the large stage's shape (default: kdray's auto); "
+                             "a scene whose stats.json names another shape fails")
     args = parser.parse_args()
 
     if not os.path.isdir(SHARED):
@@ -110,20 +114,24 @@ def main():
                                       "--builder", args.builder, "--tracer", args.tracer, "-o", out]
                                      + (["--quality", quality] if quality else [])
                                      + (["--small-stage", args.small_stage]
-                                        if args.small_stage else []),
+                                        if args.small_stage else [])
+                                     + (["--large-stage", args.large_stage]
+                                        if args.large_stage else []),
                                      capture_output=True, text=True)
                 if run.returncode != 0:
                     print(f"FAIL {name}: kdray: {run.stderr.strip()}")
                     failures += 1
                     continue
-                if args.small_stage not in ("", "auto"):
-                    with open(os.path.join(out, "stats.json")) as f:
-                        ran = json.load(f)["frames"][0]["tree"].get("small_stage")
-                    if ran != args.small_stage:
-                        print(f"FAIL {name}: asked for the {args.small_stage} small stage, "
-                              f"stats.json says {ran}")
-                        failures += 1
-                        continue
+                with open(os.path.join(out, "stats.json")) as f:
+                    tree = json.load(f)["frames"][0]["tree"]
+                wrong = [f"the {asked} {key.replace('_', ' ')}, stats.json says {tree.get(key)}"
+                         for key, asked in (("small_stage", args.small_stage),
+                                            ("large_stage", args.large_stage))
+                         if asked not in ("", "auto") and tree.get(key) != asked]
+                if wrong:
+                    print(f"FAIL {name}: asked for " + "; ".join(wrong))
+                    failures += 1
+                    continue
                 kdray_seconds = time.time() - start
                 ours = os.path.join(out, stem + ".aov.exr")
                 cmp = subprocess.run([peer, "--compare", ours, theirs], check=True,

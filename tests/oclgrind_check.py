@@ -231,16 +231,24 @@ def scenes(work):
 
 
 # Each case: a scene, kdray's options under Oclgrind. The reference is always the CPU builder and
-# tracer. Qualities and both small stages on the scenes whose large stage runs several levels.
+# tracer. Qualities, both small stages and both large stages on the scenes whose large stage runs
+# several levels (Oclgrind reports a GPU, so auto picks per-level and level; the CPU shapes are
+# asked for by name).
 CASES = {
     "clusters-high-per-level": ("clusters", ["--quality", "high", "--small-stage", "per-level"]),
-    "clusters-low-per-root": ("clusters", ["--quality", "low", "--small-stage", "per-root"]),
+    "clusters-low-per-root": ("clusters", ["--quality", "low", "--small-stage", "per-root",
+                                           "--large-stage", "chunked"]),
     "coplanar-medium-per-level": ("coplanar", ["--quality", "medium", "--small-stage", "per-level"]),
-    "coplanar-high-per-root": ("coplanar", ["--quality", "high", "--small-stage", "per-root"]),
+    "coplanar-high-per-root": ("coplanar", ["--quality", "high", "--small-stage", "per-root",
+                                            "--large-stage", "chunked"]),
     "coincident-low-per-level": ("coincident", ["--quality", "low", "--small-stage", "per-level"]),
     "coincident-medium-per-root": ("coincident", ["--quality", "medium", "--small-stage",
-                                                  "per-root"]),
-    "effects": ("effects", []),
+                                                  "per-root", "--large-stage", "chunked"]),
+    # Work-groups of 64: the element-parallel large stage walks each 256-reference chunk in four
+    # rounds, its scans carried from round to round.
+    "clusters-level-groups-of-64": ("clusters", ["--quality", "high", "--large-stage", "level"],
+                                    ["--max-wgsize", "64"]),
+"effects": ("effects", []),
     "anim": ("anim", ["--quality", "medium"]),
     "reference-builder": ("coplanar", ["--builder", "reference"]),
     "reference-tracer": ("clusters", ["--tracer", "reference", "--quality", "high"]),

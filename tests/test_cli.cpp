@@ -189,12 +189,13 @@ TEST_CASE("--quality: the ladder's parameters, each command's default, options s
     fs::remove_all(dir);
 }
 
-TEST_CASE("--small-stage: both shapes build the same tree, say which ran; a bad name is refused") {
+TEST_CASE(
+    "--small-stage, --large-stage: each stage's shapes build the same tree, say which ran; "
+    "a bad name is refused") {
     fs::path dir = fresh_temp_dir("cli-small-stage");
     const fs::path obj = write_obj(dir / "in" / "frame_1.obj", random_triangles(2000, 17));
-    auto build_json = [&](const std::string& stage) {
-        const CommandResult r =
-            run_kdray({"build", obj.string(), "--json", "--small-stage", stage});
+    auto build_json = [&](const std::string& stage, const std::string& option = "--small-stage") {
+        const CommandResult r = run_kdray({"build", obj.string(), "--json", option, stage});
         REQUIRE_MESSAGE(r.status == 0, r.err);
         return nlohmann::json::parse(r.out);
     };
@@ -219,6 +220,18 @@ TEST_CASE("--small-stage: both shapes build the same tree, say which ran; a bad 
     r = run_kdray({"build", obj.string(), "--small-stage", "bogus"});
     CHECK(r.status == 2);
     CHECK(r.err.find("--small-stage") != std::string::npos);
+    // The large stage: the same, with its own names.
+    const nlohmann::json chunked = build_json("chunked", "--large-stage");
+    const nlohmann::json level = build_json("level", "--large-stage");
+    CHECK(chunked["large_stage"] == "chunked");
+    CHECK(level["large_stage"] == "level");
+    CHECK(level["params"]["large_stage"] == "level");
+    CHECK(level["nodes"] == chunked["nodes"]);
+    CHECK(level["sah_cost"] == chunked["sah_cost"]);
+    CHECK((automatic["large_stage"] == "chunked" || automatic["large_stage"] == "level"));
+    r = run_kdray({"build", obj.string(), "--large-stage", "depth"});
+    CHECK(r.status == 2);
+    CHECK(r.err.find("--large-stage") != std::string::npos);
     fs::remove_all(dir);
 }
 
@@ -410,7 +423,7 @@ TEST_CASE("render --help lists its options under their groups, each group once")
         {"Device", {"--device"}},
         {"Tree",
          {"--builder", "--ct", "--ci", "--quality", "--large-threshold", "--small-stage",
-          "--tree-depth"}}};
+          "--large-stage", "--tree-depth"}}};
     for (const auto& [name, options] : expected)
         for (const std::string& option : options) {
             CAPTURE(option);

@@ -26,6 +26,13 @@ BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins) {
         k.count_large = make_kernel(large, "kd_count_large_children");
         k.emit_large = make_kernel(large, "kd_emit_large_children");
         k.distribute = make_kernel(large, "kd_distribute_chunks");
+        k.reduce_box_groups = make_kernel(large, "kd_reduce_box_chunk_groups");
+        if (large_split_bins > 0) {
+            k.bin_large_groups = make_kernel(large, "kd_bin_large_groups");
+            k.sum_node_bins = make_kernel(large, "kd_sum_node_bins");
+        }
+        k.classify_groups = make_kernel(large, "kd_classify_chunk_groups");
+        k.distribute_groups = make_kernel(large, "kd_distribute_chunk_groups");
         k.split_masks = make_kernel(small, "kd_compute_split_masks");
         k.build_subtrees = make_kernel(small, "kd_build_small_subtrees");
         k.second_pass_records = make_kernel(small, "kd_second_pass_records");

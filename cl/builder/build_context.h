@@ -22,6 +22,9 @@ namespace kdray::build_detail {
 /// The builder's kernels, created once per device and large_split_bins (builder_kernels).
 struct BuilderKernels {
     cl::Kernel compute_aabbs, bin_large, split_large, classify, count_large, emit_large, distribute;
+    // The large stage's element-parallel shape (build_large_groups.cl, in the large program).
+    cl::Kernel reduce_box_groups, bin_large_groups, sum_node_bins, classify_groups,
+        distribute_groups;
     cl::Kernel split_masks, build_subtrees, second_pass_records;
     // The small stage's per-level shape (build_small_level.cl, in the small program).
     cl::Kernel start_small_level, split_small_level, size_small_level, place_small_level,
@@ -49,7 +52,9 @@ struct BuildContext {
           memory(d),
           primitives(d, &memory),
           kernels(builder_kernels(d, p.large_split_bins)),
-          params(p) {}
+          params(p),
+          element_parallel_large(p.large_stage == LargeStage::Level ||
+                                 (p.large_stage == LargeStage::Auto && d.is_gpu())) {}
     /// An upload may still read host memory when a stage throws: wait for it before that memory
     /// goes.
     ~BuildContext();
@@ -62,6 +67,8 @@ struct BuildContext {
     ClPrimitives primitives;
     BuilderKernels& kernels;
     BuildParams params;
+    /// The large stage's shape: a work-item per reference (LargeStage::Level) or per chunk.
+    bool element_parallel_large;
 
     /// A counted array of `count` elements of T (sized by the shared struct, not by hand); a new
     /// buffer has room for `room` elements if that is more (DeviceMemory::allocate).

@@ -37,6 +37,18 @@ void keep_room(BuildContext& ctx, DeviceArray& array, std::size_t count, const s
     array = ctx.allocate<T>(count, what, with_room(count));
 }
 
+/// A pass over the level's reduction chunks in the build's shape (BuildContext::
+/// element_parallel_large): `per_chunk` with a work-item per chunk, or `per_reference`, its
+/// build_large_groups.cl twin taking the same arguments, with a work-group per chunk.
+template <class... Args>
+void enqueue_chunk_pass(BuildContext& ctx, cl::Kernel& per_chunk, cl::Kernel& per_reference,
+                        std::size_t chunks, const Args&... args) {
+    if (ctx.element_parallel_large)
+        enqueue_chunk_groups(ctx.device, per_reference, chunks, args...);
+    else
+        enqueue_kernel(ctx.device, per_chunk, chunks, args...);
+}
+
 /// What one level decides about its nodes and references; it lives for that level only.
 struct LevelSplit {
     DeviceArray tight_box;   // KdBuildBox per node: its references' bounds
@@ -62,11 +74,22 @@ struct LevelTotals {
 void decide_splits(BuildContext& ctx, const LargeLevel& level, bool force_leaf, LevelSplit& s) {
     const cl_uint nodes = level.nodes, chunks = level.chunks;
     s.tight_box = ctx.allocate<KdBuildBox>(nodes, "large node tight boxes");
+    const bool per_reference = ctx.element_parallel_large;
     if (!force_leaf) {
         DeviceArray chunk_boxes = ctx.allocate<KdBuildBox>(chunks, "reduction chunks");
-        ctx.primitives.reduce_box_segments(
-            level.ref_box.buffer(), level.ref_start.buffer(), level.ref_count.buffer(),
-            level.chunk_start.buffer(), nodes, chunks, chunk_boxes.buffer(), s.tight_box.buffer());
+        if (per_reference) {
+            enqueue_chunk_groups(ctx.device, ctx.kernels.reduce_box_groups, chunks,
+                                 level.ref_box.buffer(), level.ref_start.buffer(),
+                                 level.ref_count.buffer(), level.chunk_start.buffer(), nodes,
+                                 chunk_boxes.buffer());
+            ctx.primitives.union_chunk_boxes(chunk_boxes.buffer(), level.chunk_start.buffer(),
+                                             nodes, s.tight_box.buffer());
+        } else {
+            ctx.primitives.reduce_box_segments(level.ref_box.buffer(), level.ref_start.buffer(),
+                                               level.ref_count.buffer(), level.chunk_start.buffer(),
+                                               nodes, chunks, chunk_boxes.buffer(),
+                                               s.tight_box.buffer());
+        }
     }
     s.split = ctx.allocate<KdLargeSplit>(nodes, "large splits");
     s.cuts = ctx.allocate<KdLargeCuts>(nodes, "empty-space cuts");
@@ -74,11 +97,26 @@ void decide_splits(BuildContext& ctx, const LargeLevel& level, bool force_leaf, 
     // With the spatial median no kernel reads the bins; the argument still needs a buffer.
     s.chunk_bins = ctx.allocate<cl_uint>(
         bins > 0 ? std::size_t(chunks) * KDRAY_BIN_COUNTS * bins : 1, "large node SAH bins");
-    if (bins > 0 && !force_leaf)
+    // The element-parallel shape sums each node's bins in a kernel of its own (a work-item per
+    // node and bin value), so that the split reads one set per node.
+    const bool bins_by_node = per_reference && bins > 0 && !force_leaf;
+    if (bins > 0 && !force_leaf && !per_reference)
         enqueue_kernel(ctx.device, ctx.kernels.bin_large, chunks, level.ref_box.buffer(),
                        level.ref_start.buffer(), level.ref_count.buffer(),
                        level.chunk_start.buffer(), nodes, chunks, level.node.buffer(),
                        s.tight_box.buffer(), s.chunk_bins.buffer());
+    if (bins_by_node) {
+        enqueue_chunk_groups(ctx.device, ctx.kernels.bin_large_groups, chunks,
+                             level.ref_box.buffer(), level.ref_start.buffer(),
+                             level.ref_count.buffer(), level.chunk_start.buffer(), nodes,
+                             level.node.buffer(), s.tight_box.buffer(), s.chunk_bins.buffer());
+        DeviceArray node_bins =
+            ctx.allocate<cl_uint>(std::size_t(nodes) * KDRAY_BIN_COUNTS * bins, "node SAH bins");
+        enqueue_kernel(ctx.device, ctx.kernels.sum_node_bins,
+                       std::size_t(nodes) * KDRAY_BIN_COUNTS * bins, level.chunk_start.buffer(),
+                       nodes, s.chunk_bins.buffer(), node_bins.buffer());
+        s.chunk_bins = std::move(node_bins);
+    }
     const KdLargeSplitArgs args{nodes,
                                 cl_uint(ctx.params.max_depth),
                                 cl_uint(force_leaf),
@@ -86,7 +124,7 @@ void decide_splits(BuildContext& ctx, const LargeLevel& level, bool force_leaf, 
                                 ctx.params.costs.traversal,
                                 ctx.params.costs.intersection,
                                 ctx.params.empty_bonus,
-                                0};
+                                cl_uint(bins_by_node)};
     enqueue_kernel(ctx.device, ctx.kernels.split_large, nodes, args, level.node.buffer(),
                    s.tight_box.buffer(), level.chunk_start.buffer(), level.ref_count.buffer(),
                    s.chunk_bins.buffer(), s.split.buffer(), s.cuts.buffer());
@@ -102,11 +140,12 @@ LevelTotals classify_and_count(BuildContext& ctx, const LargeLevel& level,
     keep_room<cl_uchar>(ctx, scratch.ref_sides, std::max<std::size_t>(refs, 4), "reference sides");
     keep_room<KdBuildBox>(ctx, scratch.child_box, 2 * refs, "reference child boxes");
     s.chunk_rank = ctx.allocate<cl_uint>(2 * chunks + 1, "chunk ranks");
-    enqueue_kernel(ctx.device, ctx.kernels.classify, chunks, args, level.ref_start.buffer(),
-                   level.ref_count.buffer(), level.chunk_start.buffer(), level.ref_tri.buffer(),
-                   level.ref_box.buffer(), triangles.triangles.buffer(), level.node.buffer(),
-                   s.split.buffer(), scratch.ref_sides.buffer(), scratch.child_box.buffer(),
-                   s.chunk_rank.buffer());
+    enqueue_chunk_pass(ctx, ctx.kernels.classify, ctx.kernels.classify_groups, chunks, args,
+                       level.ref_start.buffer(), level.ref_count.buffer(),
+                       level.chunk_start.buffer(), level.ref_tri.buffer(), level.ref_box.buffer(),
+                       triangles.triangles.buffer(), level.node.buffer(), s.split.buffer(),
+                       scratch.ref_sides.buffer(), scratch.child_box.buffer(),
+                       s.chunk_rank.buffer());
     ctx.primitives.exclusive_scan(s.chunk_rank.buffer(), s.chunk_rank.buffer(), 2 * chunks);
 
     const std::size_t slots = 2 * std::size_t(level.nodes);
@@ -184,12 +223,13 @@ LargeLevel LargeLevel::next(BuildContext& ctx, const TriangleBounds& triangles, 
                    ref_count.buffer(), s.split.buffer(), s.cuts.buffer(), s.slot_rank.buffer(),
                    output.records.buffer(), next.node.buffer(), next.ref_start.buffer(),
                    next.ref_count.buffer(), next.chunk_start.buffer(), small.roots.buffer());
-    enqueue_kernel(ctx.device, ctx.kernels.distribute, chunks, args, ref_start.buffer(),
-                   ref_count.buffer(), chunk_start.buffer(), ref_tri.buffer(), ref_box.buffer(),
-                   scratch.ref_sides.buffer(), scratch.child_box.buffer(), s.split.buffer(),
-                   s.chunk_rank.buffer(), s.slot_rank.buffer(), next.ref_tri.buffer(),
-                   next.ref_box.buffer(), small.ref_tri.buffer(), small.ref_box.buffer(),
-                   small.ref_root.buffer(), output.leaf_store.buffer());
+    enqueue_chunk_pass(ctx, ctx.kernels.distribute, ctx.kernels.distribute_groups, chunks, args,
+                       ref_start.buffer(), ref_count.buffer(), chunk_start.buffer(),
+                       ref_tri.buffer(), ref_box.buffer(), scratch.ref_sides.buffer(),
+                       scratch.child_box.buffer(), s.split.buffer(), s.chunk_rank.buffer(),
+                       s.slot_rank.buffer(), next.ref_tri.buffer(), next.ref_box.buffer(),
+                       small.ref_tri.buffer(), small.ref_box.buffer(), small.ref_root.buffer(),
+                       output.leaf_store.buffer());
     // One batch per generation: a chain's nodes are each other's parents (build_output.cl).
     for (unsigned g = 0; g <= KDRAY_MAX_CUTS; ++g)
         output.add_batch(totals.total(KDRAY_SLOT_CHILD + g));

@@ -111,6 +111,9 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
 
     Build b(device, tree.params);
     BuildContext& ctx = b.ctx;
+    if (report)
+        report->large_stage =
+            large_stage_name(ctx.element_parallel_large ? LargeStage::Level : LargeStage::Chunked);
     StageClock clock(device, report);
     b.output.reserve_records(ctx, 1);
     b.output.add_batch(1);  // the root, id 0

@@ -50,4 +50,23 @@ void enqueue_kernel(ClDevice& device, cl::Kernel& kernel, std::size_t count, con
     }
 }
 
+/// Enqueues `kernel` over `groups` work-groups of one KDRAY_REDUCE_CHUNK-sized chunk each: the
+/// local size is the largest power of two up to KDRAY_REDUCE_CHUNK that the kernel and the
+/// device allow (choose_group_1d), and the kernel walks its chunk in rounds of that many
+/// work-items (build_large_groups.cl). Nothing when groups is 0.
+template <class... Args>
+void enqueue_chunk_groups(ClDevice& device, cl::Kernel& kernel, std::size_t groups,
+                          const Args&... args) {
+    if (groups == 0) return;
+    try {
+        set_kernel_args(kernel, args...);
+        const std::size_t group = device.group_1d(kernel, KDRAY_REDUCE_CHUNK);
+        device.launch(kernel, cl::NDRange(groups * group), cl::NDRange(group));
+    } catch (const cl::Error& e) {
+        throw_cl_error("running kernel " + kernel.getInfo<CL_KERNEL_FUNCTION_NAME>() + " over " +
+                           std::to_string(groups) + " work-groups",
+                       e.what(), e.err());
+    }
+}
+
 }  // namespace kdray

@@ -112,6 +112,11 @@ void ClPrimitives::reduce_box_segments(const cl::Buffer& boxes, const cl::Buffer
                                        const cl::Buffer& chunk_boxes, const cl::Buffer& seg_boxes) {
     enqueue_kernel(device_, kernels_.reduce_box_chunks, total_chunks, boxes, seg_start, seg_count,
                    chunk_start, cl_uint(segments), cl_uint(total_chunks), chunk_boxes);
+    union_chunk_boxes(chunk_boxes, chunk_start, segments, seg_boxes);
+}
+
+void ClPrimitives::union_chunk_boxes(const cl::Buffer& chunk_boxes, const cl::Buffer& chunk_start,
+                                     std::size_t segments, const cl::Buffer& seg_boxes) {
     enqueue_kernel(device_, kernels_.reduce_box_segments, segments, chunk_boxes, chunk_start,
                    cl_uint(segments), seg_boxes);
 }

@@ -55,6 +55,11 @@ class ClPrimitives {
                              const cl::Buffer& seg_count, const cl::Buffer& chunk_start,
                              std::size_t segments, std::size_t total_chunks,
                              const cl::Buffer& chunk_boxes, const cl::Buffer& seg_boxes);
+    /// reduce_box_segments' second step alone: seg_boxes[s] = union of chunk_boxes[chunk_start[s]
+    /// .. chunk_start[s + 1]), for chunk boxes reduced elsewhere (the builder's element-parallel
+    /// large stage reduces them a work-group per chunk).
+    void union_chunk_boxes(const cl::Buffer& chunk_boxes, const cl::Buffer& chunk_start,
+                           std::size_t segments, const cl::Buffer& seg_boxes);
 
   private:
     struct Kernels;

@@ -199,7 +199,8 @@ typedef struct KdSmallLevelNode {
 
 /* KdLargeSplitArgs — 32 bytes. kd_split_large_nodes' scalars: the level's node count, the depth
  * limit, force_leaf (1: every node becomes a leaf, the level outgrew the reference budget),
- * empty_ratio C_e, the SAH costs C_t, C_i and the empty-space bonus; pad 0. */
+ * empty_ratio C_e, the SAH costs C_t, C_i and the empty-space bonus; bins_by_node: 1 when the
+ * SAH bins come summed per node (the element-parallel large stage), 0 per reduction chunk. */
 typedef struct KdLargeSplitArgs {
     kd_u32 nodes;
     kd_u32 max_depth;
@@ -208,7 +209,7 @@ typedef struct KdLargeSplitArgs {
     kd_f32 cost_traversal;
     kd_f32 cost_intersection;
     kd_f32 empty_bonus;
-    kd_u32 pad;
+    kd_u32 bins_by_node;
 } KdLargeSplitArgs;
 
 /* KdLargeLevelArgs — 32 bytes. What the large stage's per-level kernels after the split know of

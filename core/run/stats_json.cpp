@@ -48,6 +48,8 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
         // What was asked for (auto too), and the shape that ran (per-root or per-level).
         j["params"]["small_stage"] = small_stage_name(p.small_stage);
         if (!built.report.small_stage.empty()) j["small_stage"] = built.report.small_stage;
+        j["params"]["large_stage"] = large_stage_name(p.large_stage);
+        if (!built.report.large_stage.empty()) j["large_stage"] = built.report.large_stage;
         j["params"]["empty_bonus"] = p.empty_bonus;
         j["large_node_levels"] = built.report.large_node_levels;
         j["small_node_levels"] = built.report.small_node_levels;

@@ -44,6 +44,24 @@ std::optional<SmallStage> parse_small_stage(std::string_view name) {
     return std::nullopt;
 }
 
+const char* large_stage_name(LargeStage stage) {
+    switch (stage) {
+        case LargeStage::Auto:
+            return "auto";
+        case LargeStage::Chunked:
+            return "chunked";
+        case LargeStage::Level:
+            return "level";
+    }
+    return "?";
+}
+
+std::optional<LargeStage> parse_large_stage(std::string_view name) {
+    for (LargeStage stage : {LargeStage::Auto, LargeStage::Chunked, LargeStage::Level})
+        if (name == large_stage_name(stage)) return stage;
+    return std::nullopt;
+}
+
 void validate_build_params(const BuildParams& p) {
     const float ct = p.costs.traversal, ci = p.costs.intersection;
     if (!(std::isfinite(ct) && ct >= 0))
@@ -74,6 +92,10 @@ void validate_build_params(const BuildParams& p) {
         p.small_stage != SmallStage::PerLevel)
         reject("the small-node stage", "--small-stage", int(p.small_stage),
                "auto, per-root or per-level");
+    if (p.large_stage != LargeStage::Auto && p.large_stage != LargeStage::Chunked &&
+        p.large_stage != LargeStage::Level)
+        reject("the large-node stage", "--large-stage", int(p.large_stage),
+               "auto, chunked or level");
 }
 
 }  // namespace kdray

@@ -39,6 +39,20 @@ const char* small_stage_name(SmallStage stage);
 /// The stage named `name` (small_stage_name's names), or nothing.
 std::optional<SmallStage> parse_small_stage(std::string_view name);
 
+/// The shape of the OpenCL builder's large-node stage (`--large-stage`); both build the same tree.
+/// Both go level by level (Zhou et al. 2008, section 4.1). Chunked: a work-item walks a reduction
+/// chunk of KDRAY_REDUCE_CHUNK references in order (CPU devices, which run a group's items one
+/// after another). Level: the paper's element-parallel shape, a work-item per reference and a
+/// work-group per chunk reducing its boxes, bins and counts in local memory (GPUs). Auto: Level on
+/// a GPU device, Chunked otherwise.
+enum class LargeStage { Auto, Chunked, Level };
+
+/// "auto", "chunked" or "level".
+const char* large_stage_name(LargeStage stage);
+
+/// The stage named `name` (large_stage_name's names), or nothing.
+std::optional<LargeStage> parse_large_stage(std::string_view name);
+
 /// Build parameters. The reference builder uses costs, empty_bonus and max_depth; the OpenCL
 /// builder of Zhou et al. (2008) uses them all.
 struct BuildParams {
@@ -66,6 +80,8 @@ struct BuildParams {
     /// OpenCL builder: the small stage's shape. It changes how the tree is built, not the tree,
     /// so tree files do not record it.
     SmallStage small_stage = SmallStage::Auto;
+    /// OpenCL builder: the large stage's shape; like small_stage, not recorded in tree files.
+    LargeStage large_stage = LargeStage::Auto;
 };
 
 /// Throws Error naming the parameter (and the command-line option that sets it) when `params`
@@ -73,8 +89,7 @@ struct BuildParams {
 /// large_node_threshold in [1, KDRAY_SMALL_ROOT_MAX_REFS] (the small stage's 64-bit masks),
 /// empty_space_ratio in [0, 1], large_split_bins in [0, kMaxLargeSplitBins], small_reclip_refs
 /// in [0, KDRAY_RECLIP_REFS], small_leaf_refs in [0, KDRAY_SMALL_ROOT_MAX_REFS], max_depth in
-/// [0, KDRAY_MAX_DEPTH], small_stage one of its three
-/// values. NaN fails every
+/// [0, KDRAY_MAX_DEPTH], small_stage and large_stage each one of its three values. NaN fails every
 /// test. The one check of every builder, the command line and tree files read back.
 void validate_build_params(const BuildParams& params);
 
@@ -98,6 +113,8 @@ struct BuildReport {
     /// The small stage's shape the OpenCL builder ran, "per-root" or "per-level" (never "auto";
     /// empty for other builders).
     std::string small_stage;
+    /// The large stage's shape it ran, "chunked" or "level" (likewise).
+    std::string large_stage;
     std::vector<std::string> warnings;  // one line each, for the user and stats.json
 };
 

@@ -146,8 +146,10 @@ __kernel void kd_split_large_nodes(KdLargeSplitArgs a, __global KdLargeNode* nod
     float lo = kd_axis_of(box.lo, axis), hi = kd_axis_of(box.hi, axis);
     float pos = 0.5f * (lo + hi);
 #if KDRAY_LARGE_BINS > 0
-    if (kd_best_large_split(box, tight, i, node_chunk, chunk_bins, node_count[i], a.cost_traversal,
-                            a.cost_intersection, a.empty_bonus, &axis, &pos)) {
+    const uint bins_first = a.bins_by_node ? i : node_chunk[i];
+    const uint bins_end = a.bins_by_node ? i + 1 : node_chunk[i + 1];
+    if (kd_best_large_split(box, tight, chunk_bins, bins_first, bins_end, node_count[i],
+                            a.cost_traversal, a.cost_intersection, a.empty_bonus, &axis, &pos)) {
         lo = kd_axis_of(box.lo, axis);
         hi = kd_axis_of(box.hi, axis);
     }
@@ -164,11 +166,43 @@ __kernel void kd_split_large_nodes(KdLargeSplitArgs a, __global KdLargeNode* nod
  * child_box (at [side * refs + r]), not ref_box. */
 #define KDRAY_CLIPPED 4u
 
-/* The references begin..end of one node (box `node`) against its split plane, kd_classify_chunks'
- * loop: returns the counts going below and above. Always inlined, and called with a constant
- * axis, so that each copy reads that axis's coordinates directly (with the axis a variable, the
- * loop picked them by masked moves); with the clipping inlined too (no box copied to the stack
- * per call), Kitchen build 85.9 -> 76.8 ms (median of 6 interleaved rounds of 7 builds). */
+/* Reference r of a node (box `node`) against its split plane: its sides, KDRAY_BELOW |
+ * KDRAY_ABOVE, with KDRAY_CLIPPED and its box in each child it enters written to child_box (at
+ * [side * refs + r]) when it straddles the plane. Always inlined, and called with a constant axis,
+ * so that each copy reads that axis's coordinates directly (with the axis a variable, the loop
+ * picked them by masked moves); with the clipping inlined too (no box copied to the stack per
+ * call), Kitchen build 85.9 -> 76.8 ms (median of 6 interleaved rounds of 7 builds). Both large
+ * stages call it: a chunk's loop (kd_classify_chunks) and a work-item per reference
+ * (build_large_groups.cl). */
+KDRAY_HOT_INLINE uint kd_classify_reference(uint r, uint refs, const uint axis, float split,
+                                            uint planar, KdBox node, __global const uint* ref_tri,
+                                            __global const float* ref_box,
+                                            __global const float* triangles,
+                                            __global float* child_box) {
+    __global const float* box = ref_box + (size_t)r * KDRAY_BOX_FLOATS;
+    uint sides = kd_classify(box[axis], box[3 + axis], split, planar);
+    if (sides == (KDRAY_BELOW | KDRAY_ABOVE)) {
+        const KdBox b = kd_load_box(ref_box, r);
+        __global const float* tri = triangles + (size_t)ref_tri[r] * KDRAY_FLOATS_PER_TRIANGLE;
+        uint entered = 0;
+        for (uint side = 0; side < 2; ++side) {
+            KdBox cut = b, clipped;
+            if (side == 0) cut.hi = kd_with_axis(cut.hi, axis, split);
+            else cut.lo = kd_with_axis(cut.lo, axis, split);
+            if (kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, side), &clipped)) {
+                entered |= side == 0 ? KDRAY_BELOW : KDRAY_ABOVE;
+                cut.lo = fmin(fmax(cut.lo, clipped.lo), cut.hi);
+                cut.hi = fmax(fmin(cut.hi, clipped.hi), cut.lo);
+            }
+            kd_store_box(child_box, (size_t)side * refs + r, cut);
+        }
+        sides = (entered ? entered : sides) | KDRAY_CLIPPED;
+    }
+    return sides;
+}
+
+/* The references begin..end of one node against its split plane, kd_classify_chunks' loop:
+ * returns the counts going below and above. */
 KDRAY_HOT_INLINE uint2 kd_classify_references(uint begin, uint end, uint refs, const uint axis,
                                               float split, uint planar, KdBox node,
                                               __global const uint* ref_tri,
@@ -178,25 +212,8 @@ KDRAY_HOT_INLINE uint2 kd_classify_references(uint begin, uint end, uint refs, c
                                               __global float* child_box) {
     uint below = 0, above = 0;
     for (uint r = begin; r < end; ++r) {
-        __global const float* box = ref_box + (size_t)r * KDRAY_BOX_FLOATS;
-        uint sides = kd_classify(box[axis], box[3 + axis], split, planar);
-        if (sides == (KDRAY_BELOW | KDRAY_ABOVE)) {
-            const KdBox b = kd_load_box(ref_box, r);
-            __global const float* tri = triangles + (size_t)ref_tri[r] * KDRAY_FLOATS_PER_TRIANGLE;
-            uint entered = 0;
-            for (uint side = 0; side < 2; ++side) {
-                KdBox cut = b, clipped;
-                if (side == 0) cut.hi = kd_with_axis(cut.hi, axis, split);
-                else cut.lo = kd_with_axis(cut.lo, axis, split);
-                if (kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, side), &clipped)) {
-                    entered |= side == 0 ? KDRAY_BELOW : KDRAY_ABOVE;
-                    cut.lo = fmin(fmax(cut.lo, clipped.lo), cut.hi);
-                    cut.hi = fmax(fmin(cut.hi, clipped.hi), cut.lo);
-                }
-                kd_store_box(child_box, (size_t)side * refs + r, cut);
-            }
-            sides = (entered ? entered : sides) | KDRAY_CLIPPED;
-        }
+        const uint sides = kd_classify_reference(r, refs, axis, split, planar, node, ref_tri,
+                                                 ref_box, triangles, child_box);
         ref_sides[r] = (uchar)sides;
         below += (sides & KDRAY_BELOW) != 0;
         above += (sides & KDRAY_ABOVE) != 0;
@@ -455,3 +472,6 @@ __kernel void kd_distribute_chunks(
         }
     }
 }
+
+/* The same passes with a work-item per reference (the element-parallel large stage). */
+#include "cl/builder/kernels/build_large_groups.cl"

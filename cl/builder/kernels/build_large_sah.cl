@@ -43,19 +43,20 @@ KDRAY_INLINE KdBox kd_bin_box(KdBox box, __global const float* tight_box, uint i
     return tight;
 }
 
-/* The cheapest binned plane of node i inside `box` (its box after the empty-space cuts), as
- * *axis and *pos; 0 when no plane lies strictly inside the box. A plane's counts are those of
+/* The cheapest binned plane of a node inside `box` (its box after the empty-space cuts), as
+ * *axis and *pos; 0 when no plane lies strictly inside the box. The node's counts are the sum of
+ * bins[first .. end): its chunks' bins, or (the element-parallel stage, build_large_groups.cl)
+ * the one entry kd_sum_node_bins made of them. A plane's counts are those of
  * the bins: below, the references whose lo bin lies before it; above, those whose hi bin lies at
  * or after it. The exact classification follows the choice. */
-KDRAY_INLINE int kd_best_large_split(KdBox box, KdBox tight, uint i,
-                                     __global const uint* node_chunk,
-                                     __global const uint* chunk_bins, uint count,
+KDRAY_INLINE int kd_best_large_split(KdBox box, KdBox tight, __global const uint* bins,
+                                     uint first, uint end, uint count,
                                      float cost_traversal, float cost_intersection,
                                      float empty_bonus, uint* axis, float* pos) {
     uint counts[KDRAY_BIN_VALUES];
     for (uint k = 0; k < KDRAY_BIN_VALUES; ++k) counts[k] = 0;
-    for (uint c = node_chunk[i]; c < node_chunk[i + 1]; ++c) {
-        __global const uint* in = chunk_bins + (size_t)c * KDRAY_BIN_VALUES;
+    for (uint c = first; c < end; ++c) {
+        __global const uint* in = bins + (size_t)c * KDRAY_BIN_VALUES;
         for (uint k = 0; k < KDRAY_BIN_VALUES; ++k) counts[k] += in[k];
     }
     const float3 e = box.hi - box.lo;

@@ -1,0 +1,101 @@
+// test_opencl_large_stage.cpp — the OpenCL builder's large stage in the paper's element-parallel
+// shape (--large-stage level: a work-item per reference, a work-group per reduction chunk;
+// build_large_groups.cl) against its chunked shape (a work-item per chunk, build_large.cl): the
+// two must build the same tree node for node, at every quality, on scenes where the large stage
+// runs many levels, cuts empty space, clips straddlers, makes leaves of coincident faces and
+// splits at the median (no bins). A group kernel that ranked, binned, clipped or reduced one
+// reference differently would show as a node or a leaf index that differs; each tree also traces
+// as brute force does (check_same_tree).
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cl/builder/opencl_builder.h"
+#include "core/scene/scene.h"
+#include "core/tree/build_quality.h"
+#include "core/tree/tree_stats.h"
+#include "tests/support.h"
+#include "tests/test_opencl_fixture.h"
+
+using namespace kdray;
+
+namespace {
+
+BuildParams with_stage(BuildParams params, LargeStage stage) {
+    params.large_stage = stage;
+    return params;
+}
+
+/// Builds `scene` with both large-stage shapes and checks that the level tree is the chunked one,
+/// that each build says which shape ran, and that both took the same number of large levels.
+void check_same_as_chunked(const Scene& scene, const std::string& name,
+                           const BuildParams& params = {}) {
+    CAPTURE(name);
+    ClDevice& device = test::opencl_test_device();
+    BuildReport chunked_report, level_report;
+    const KdTree chunked =
+        build_opencl(device, scene, with_stage(params, LargeStage::Chunked), &chunked_report);
+    const KdTree level =
+        build_opencl(device, scene, with_stage(params, LargeStage::Level), &level_report);
+    CHECK(chunked_report.large_stage == "chunked");
+    CHECK(level_report.large_stage == "level");
+    CHECK(level_report.large_node_levels == chunked_report.large_node_levels);
+    test::check_same_tree(level, chunked, scene, 31);
+}
+
+/// Clusters of random triangles far apart on a diagonal: the top levels cut the empty space
+/// between them (chains of cuts) before any plane splits a cluster.
+Scene far_clusters() {
+    std::vector<float> tris;
+    for (int c = 0; c < 4; ++c) {
+        const Scene cluster = test::random_triangles(900, 40 + c);
+        const float offset = float(c) * 10.0f;
+        for (std::size_t t = 0; t < cluster.triangle_count(); ++t)
+            for (int v = 0; v < 3; ++v) {
+                const Vec3 p = cluster.vertex(t, v);
+                tris.insert(tris.end(), {p.x + offset, p.y + offset * 0.5f, p.z - offset});
+            }
+    }
+    return make_scene(std::move(tris), "far_clusters");
+}
+
+}  // namespace
+
+TEST_CASE("opencl large stage: the element-parallel shape builds the chunked trees") {
+    // Over 256 references per node at the top (several chunks per node, so ranks cross chunks),
+    // at every quality of the ladder, and with the spatial median (large_split_bins 0: no bin
+    // kernels at all).
+    const std::vector<std::pair<std::string, Scene>> scenes = [] {
+        std::vector<std::pair<std::string, Scene>> s;
+        s.emplace_back("random_20000", test::random_triangles(20000, 2801));
+        s.emplace_back("far_clusters", far_clusters());
+        s.emplace_back("long_slivers", test::long_slivers(600, 7));
+        s.emplace_back("coincident", test::coincident_triangles(400));
+        s.emplace_back("planar", test::planar_triangles(3000, 5));
+        return s;
+    }();
+    for (const auto& [name, scene] : scenes) {
+        for (BuildQuality q : {BuildQuality::Low, BuildQuality::Medium, BuildQuality::High})
+            check_same_as_chunked(scene, name + "_" + build_quality_name(q),
+                                  with_build_quality({}, q));
+        BuildParams median;
+        median.large_split_bins = 0;
+        check_same_as_chunked(scene, name + "_median", median);
+    }
+}
+
+TEST_CASE("opencl large stage: the hard scenes build the same tree in both shapes") {
+    for (const test::NamedScene& s : test::hard_scenes()) check_same_as_chunked(s.scene, s.name);
+}
+
+TEST_CASE("opencl large stage: the bunny builds the same tree in both shapes (../shared)") {
+    const auto bunny = test::shared_dir() / "scenes" / "bunny" / "bunny.obj";
+    if (!std::filesystem::exists(bunny)) {
+        MESSAGE("skipped: " << bunny.string() << " is absent (../shared is not here)");
+        return;
+    }
+    check_same_as_chunked(load_obj(bunny), "bunny");
+}
