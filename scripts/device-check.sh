@@ -8,7 +8,7 @@
 #      most 1e-4) and, where listed, image (a pixel is off when a channel differs by more than
 #      0.02 in linear EXR; at most 0.5% of pixels off), by `kdray compare`;
 #   3. bench-build: `kdray build --json --repeat N` of Kitchen, Robots and dragon res2 at each
-#      quality (low, medium, high);
+#      quality (low, medium, high), and Kitchen's at medium with each --large-stage;
 #   4. bench-render: `kdray render --warm-up` of the same at each quality, at the render file's
 #      size (stats.json).
 # Every step has its own time limit and the whole a budget (--budget, 280 s), so one hang cannot
@@ -137,6 +137,16 @@ for scene in "${bench_scenes[@]}"; do
             "$kdray" build "$here/scenes/$scene.obj" --json --quality "$q" --repeat "$repeat"
     done
 done
+# The large stage in each shape (auto runs one of them): what the schedule costs on this device.
+kitchen=bart-kitchen/frame_000
+if [ -e "$here/scenes/$kitchen.obj" ]; then
+    for stage in chunked level; do
+        step "build-bart-kitchen-medium-$stage" 120 \
+            "$out/bench/build-bart-kitchen-medium-$stage.json" "$kdray" build \
+            "$here/scenes/$kitchen.obj" --json --quality medium --large-stage "$stage" \
+            --repeat "$repeat"
+    done
+fi
 for scene in "${bench_scenes[@]}"; do
     folder=$(dirname "$scene")
     [ -e "$here/scenes/$scene.obj" ] || continue
@@ -175,7 +185,7 @@ figures() {  # figures FILE KEY...: {"file": ..., KEY: value, ...}
 } 2>/dev/null >"$out/logs/correctness.jsonl"
 {
     for f in "$out"/bench/build-*.json; do
-        [ -e "$f" ] && figures "$f" quality build_ms nodes sah_cost
+        [ -e "$f" ] && figures "$f" quality large_stage build_ms large_nodes nodes sah_cost
     done
     for f in "$out"/bench/render-*.json; do
         [ -e "$f" ] && figures "$f" mean_frame_ms mean_build_ms mean_trace_ms mean_compile_ms
