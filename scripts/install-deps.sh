@@ -14,6 +14,7 @@ packages=(
     libstb-dev libtinyexr-dev  # the small image codec: scripts/device-bundle.sh, its tests
     libtinyobjloader-dev libcli11-dev nlohmann-json3-dev doctest-dev libspdlog-dev
     help2man bash-completion python3-jsonschema
+    python3-venv                                         # scripts/compare_mitsuba.py makes a venv for PyPI's mitsuba (the peer for light transport)
     oclgrind                                             # the strict second OpenCL implementation (tests label oclgrind)
     clang-14 llvm-14 libclc-14 libclc-14-dev             # compile the kernels for NVIDIA and AMD targets (gpu_compile test)
 )
