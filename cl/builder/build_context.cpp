@@ -26,6 +26,7 @@ BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins) {
         k.count_large = make_kernel(large, "kd_count_large_children");
         k.emit_large = make_kernel(large, "kd_emit_large_children");
         k.distribute = make_kernel(large, "kd_distribute_chunks");
+        k.union_parent_boxes = make_kernel(large, "kd_union_parent_boxes");
         k.reduce_box_groups = make_kernel(large, "kd_reduce_box_chunk_groups");
         if (large_split_bins > 0) {
             k.bin_large_groups = make_kernel(large, "kd_bin_large_groups");

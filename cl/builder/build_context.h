@@ -21,7 +21,8 @@ namespace kdray::build_detail {
 
 /// The builder's kernels, created once per device and large_split_bins (builder_kernels).
 struct BuilderKernels {
-    cl::Kernel compute_aabbs, bin_large, split_large, classify, count_large, emit_large, distribute;
+    cl::Kernel compute_aabbs, bin_large, split_large, classify, count_large, emit_large, distribute,
+        union_parent_boxes;
     // The large stage's element-parallel shape (build_large_groups.cl, in the large program).
     cl::Kernel reduce_box_groups, bin_large_groups, sum_node_bins, classify_groups,
         distribute_groups;

@@ -70,12 +70,17 @@ struct LevelTotals {
     }
 };
 
-/* Node bounds (segmented reduction of the reference boxes), then each node's cuts and split. */
+/* Node bounds (the root: a segmented reduction of its reference boxes; below it, the union of
+ * what the parent's chunks sent to each node), then each node's cuts and split. */
 void decide_splits(BuildContext& ctx, const LargeLevel& level, bool force_leaf, LevelSplit& s) {
     const cl_uint nodes = level.nodes, chunks = level.chunks;
     s.tight_box = ctx.allocate<KdBuildBox>(nodes, "large node tight boxes");
     const bool per_reference = ctx.element_parallel_large;
-    if (!force_leaf) {
+    if (!force_leaf && level.from_parent.chunks > 0) {
+        enqueue_kernel(ctx.device, ctx.kernels.union_parent_boxes, nodes, level.parent.buffer(),
+                       level.from_parent.chunk_start.buffer(), level.from_parent.chunks,
+                       level.from_parent.side_box.buffer(), nodes, s.tight_box.buffer());
+    } else if (!force_leaf) {
         DeviceArray chunk_boxes = ctx.allocate<KdBuildBox>(chunks, "reduction chunks");
         if (per_reference) {
             enqueue_chunk_groups(ctx.device, ctx.kernels.reduce_box_groups, chunks,
@@ -177,6 +182,7 @@ LargeLevel LargeLevel::allocate(BuildContext& ctx, cl_uint nodes, cl_uint refs, 
     level.chunk_start = ctx.allocate<cl_uint>(std::size_t(nodes) + 1, "large node chunk starts");
     level.ref_tri = ctx.allocate<cl_uint>(refs, "triangle references", with_room(refs));
     level.ref_box = ctx.allocate<KdBuildBox>(refs, "reference boxes", with_room(refs));
+    level.parent = ctx.allocate<cl_uint>(nodes, "large node parent slots");
     return level;
 }
 
@@ -199,7 +205,7 @@ LargeLevel LargeLevel::root(BuildContext& ctx, TriangleBounds& triangles, const 
 }
 
 LargeLevel LargeLevel::next(BuildContext& ctx, const TriangleBounds& triangles, bool force_leaf,
-                            BuildOutput& output, SmallRoots& small, LargeScratch& scratch) const {
+                            BuildOutput& output, SmallRoots& small, LargeScratch& scratch) {
     LevelSplit s;
     decide_splits(ctx, *this, force_leaf, s);
     const KdLargeLevelArgs args{
@@ -222,14 +228,19 @@ LargeLevel LargeLevel::next(BuildContext& ctx, const TriangleBounds& triangles, 
     enqueue_kernel(ctx.device, ctx.kernels.emit_large, nodes, args, node.buffer(),
                    ref_count.buffer(), s.split.buffer(), s.cuts.buffer(), s.slot_rank.buffer(),
                    output.records.buffer(), next.node.buffer(), next.ref_start.buffer(),
-                   next.ref_count.buffer(), next.chunk_start.buffer(), small.roots.buffer());
+                   next.ref_count.buffer(), next.chunk_start.buffer(), next.parent.buffer(),
+                   small.roots.buffer());
+    DeviceArray side_box = ctx.allocate<KdBuildBox>(2 * std::size_t(chunks), "chunk side boxes");
     enqueue_chunk_pass(ctx, ctx.kernels.distribute, ctx.kernels.distribute_groups, chunks, args,
                        ref_start.buffer(), ref_count.buffer(), chunk_start.buffer(),
                        ref_tri.buffer(), ref_box.buffer(), scratch.ref_sides.buffer(),
                        scratch.child_box.buffer(), s.split.buffer(), s.chunk_rank.buffer(),
                        s.slot_rank.buffer(), next.ref_tri.buffer(), next.ref_box.buffer(),
                        small.ref_tri.buffer(), small.ref_box.buffer(), small.ref_root.buffer(),
-                       output.leaf_store.buffer());
+                       output.leaf_store.buffer(), side_box.buffer());
+    next.from_parent.chunks = chunks;
+    next.from_parent.side_box = std::move(side_box);
+    next.from_parent.chunk_start = std::move(chunk_start);
     // One batch per generation: a chain's nodes are each other's parents (build_output.cl).
     for (unsigned g = 0; g <= KDRAY_MAX_CUTS; ++g)
         output.add_batch(totals.total(KDRAY_SLOT_CHILD + g));

@@ -3,7 +3,8 @@
  * (§4.1), which processes every active large node of one tree level at once.
  *
  * One level, as the host chains it (cl/builder/large_level.cpp):
- *   node bounds       segmented reduction of the nodes' reference boxes (primitives.cl)
+ *   node bounds       the root: segmented reduction of its reference boxes (primitives.cl);
+ *                     below it, kd_union_parent_boxes of the boxes distribute wrote per chunk
  *   kd_bin_large_chunks        SAH bins of each reduction chunk (only with KDRAY_LARGE_BINS > 0)
  *   kd_split_large_nodes       empty-space cuts (a chain of them), then the binned SAH plane or
  *                              the spatial median, per node
@@ -11,7 +12,8 @@
  *                              chunk counts, scanned
  *   kd_count_large_children    child sizes and kinds per node -> "slot" values, scanned
  *   kd_emit_large_children     node records, next level's large nodes, new small roots
- *   kd_distribute_chunks       references (clipped) into the next level / small roots / leaves
+ *   kd_distribute_chunks       references (clipped) into the next level / small roots / leaves,
+ *                              and per chunk and side the union of the boxes it wrote
  *
  * The passes over the references go by reduction chunk (at most KDRAY_REDUCE_CHUNK references
  * of one node), one work-item each, in order: a reference's rank among its node's references
@@ -337,7 +339,7 @@ __kernel void kd_emit_large_children(KdLargeLevelArgs a, __global const KdLargeN
                                      __global const uint* slot_rank, __global KdBuildNode* records,
                                      __global KdLargeNode* next_node,
                                      __global uint* next_ref_start, __global uint* next_ref_count,
-                                     __global uint* next_chunk_start,
+                                     __global uint* next_chunk_start, __global uint* next_parent,
                                      __global KdSmallRoot* small_roots) {
     const uint i = get_global_id(0);
     const uint nodes = a.nodes;
@@ -397,6 +399,7 @@ __kernel void kd_emit_large_children(KdLargeLevelArgs a, __global const KdLargeN
             next_ref_start[j] = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s);
             next_ref_count[j] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s);
             next_chunk_start[j] = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_CHUNKS, s);
+            next_parent[j] = s;
         } else if (kd_slot_value(slot_rank, slots, KDRAY_SLOT_SMALL, s)) {
             const uint q = a.small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
             KdSmallRoot root;
@@ -418,7 +421,10 @@ __kernel void kd_emit_large_children(KdLargeLevelArgs a, __global const KdLargeN
 /* Move chunk c's references to their children (with the box kd_classify_chunks clipped to each
  * child of a straddling one), to the next level, to its small root's list, or to the leaf store,
  * in reference order: a reference's rank in its child is the chunk's scanned count plus those
- * before it in the chunk. */
+ * before it in the chunk. side_box[side * chunks + c] gets the union of the boxes the chunk sent
+ * to that side (empty for a leaf's chunk): a next-level node's tight box is the union of its
+ * parent's chunks' (kd_union_parent_boxes), so no pass reads the next level's boxes again to
+ * reduce them. */
 __kernel void kd_distribute_chunks(
     KdLargeLevelArgs a, __global const uint* node_ref_start, __global const uint* node_ref_count,
     __global const uint* node_chunk, __global const uint* ref_tri, __global const float* ref_box,
@@ -426,7 +432,7 @@ __kernel void kd_distribute_chunks(
     __global const KdLargeSplit* split, __global const uint* chunk_rank,
     __global const uint* slot_rank, __global uint* next_ref_tri, __global float* next_ref_box,
     __global uint* small_ref_tri, __global float* small_ref_box, __global uint* small_ref_root,
-    __global uint* leaf_refs) {
+    __global uint* leaf_refs, __global float* side_box) {
     const uint c = get_global_id(0);
     const uint chunks = a.chunks, refs = a.refs, nodes = a.nodes;
     const uint small_root_base = a.small_root_base, small_ref_base = a.small_ref_base;
@@ -436,10 +442,15 @@ __kernel void kd_distribute_chunks(
     const uint start = node_ref_start[i];
     const uint begin = start + (c - node_chunk[i]) * KDRAY_REDUCE_CHUNK;
     const uint end = min(start + node_ref_count[i], begin + KDRAY_REDUCE_CHUNK);
+    KdBox sent[2];
+    sent[0].lo = sent[1].lo = (float3)(INFINITY);
+    sent[0].hi = sent[1].hi = (float3)(-INFINITY);
     if (split[i].axis == KDRAY_LEAF_AXIS) {
         const uint first =
             a.leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i) - start;
         for (uint r = begin; r < end; ++r) leaf_refs[first + r] = ref_tri[r];
+        kd_store_box(side_box, c, sent[0]);
+        kd_store_box(side_box, chunks + c, sent[1]);
         return;
     }
     /* Per child: where its references go (the next level's large node or a small root's list)
@@ -461,6 +472,8 @@ __kernel void kd_distribute_chunks(
             const KdBox b = kd_load_box(sides & KDRAY_CLIPPED ? child_box : ref_box,
                                         sides & KDRAY_CLIPPED ? (size_t)side * refs + r : r);
             const uint at = dst[side]++;
+            sent[side].lo = fmin(sent[side].lo, b.lo);
+            sent[side].hi = fmax(sent[side].hi, b.hi);
             if (large[side]) {
                 next_ref_tri[at] = tri;
                 kd_store_box(next_ref_box, at, b);
@@ -471,6 +484,29 @@ __kernel void kd_distribute_chunks(
             }
         }
     }
+    kd_store_box(side_box, c, sent[0]);
+    kd_store_box(side_box, chunks + c, sent[1]);
+}
+
+/* Node bounds below the root: node j of this level is side s = parent[j] & 1 of node
+ * parent[j] >> 1 of the level before, whose chunks parent_chunk[p] .. parent_chunk[p + 1] each
+ * left in side_box the union of the boxes they sent to that side; j's tight box is their union,
+ * the same min and max that reducing j's references gives. */
+__kernel void kd_union_parent_boxes(__global const uint* parent, __global const uint* parent_chunk,
+                                    uint parent_chunks, __global const float* side_box,
+                                    uint nodes, __global float* tight_box) {
+    const uint j = get_global_id(0);
+    if (j >= nodes) return;
+    const uint p = parent[j] >> 1, side = parent[j] & 1u;
+    KdBox box;
+    box.lo = (float3)(INFINITY);
+    box.hi = (float3)(-INFINITY);
+    for (uint c = parent_chunk[p]; c < parent_chunk[p + 1]; ++c) {
+        const KdBox b = kd_load_box(side_box, (size_t)side * parent_chunks + c);
+        box.lo = fmin(box.lo, b.lo);
+        box.hi = fmax(box.hi, b.hi);
+    }
+    kd_store_box(tight_box, j, box);
 }
 
 /* The same passes with a work-item per reference (the element-parallel large stage). */

@@ -186,10 +186,21 @@ __kernel void kd_classify_chunk_groups(KdLargeLevelArgs a, __global const uint* 
     }
 }
 
+/* A float as an int that orders as the float does (negative floats' bits reversed), so that
+ * local int atomics can take a min or max of floats (OpenCL 1.2 has no float atomics). */
+KDRAY_INLINE int kd_ordered_key(float x) {
+    const int bits = as_int(x);
+    return bits >= 0 ? bits : bits ^ 0x7FFFFFFF;
+}
+KDRAY_INLINE float kd_key_float(int key) {
+    return as_float(key >= 0 ? key : key ^ 0x7FFFFFFF);
+}
+
 /* kd_distribute_chunks in this shape: a round of G references at a time, each reference's rank
  * in its child the chunk's scanned count, the counts of the rounds before, and an exclusive scan
  * of the round's flags (below in the low half-word, above in the high: a chunk holds at most
- * KDRAY_REDUCE_CHUNK references, so neither half overflows). */
+ * KDRAY_REDUCE_CHUNK references, so neither half overflows). The boxes sent to each side are
+ * reduced by local atomics on ordered keys (each work-item's own union first). */
 __kernel void kd_distribute_chunk_groups(
     KdLargeLevelArgs a, __global const uint* node_ref_start, __global const uint* node_ref_count,
     __global const uint* node_chunk, __global const uint* ref_tri, __global const float* ref_box,
@@ -197,20 +208,30 @@ __kernel void kd_distribute_chunk_groups(
     __global const KdLargeSplit* split, __global const uint* chunk_rank,
     __global const uint* slot_rank, __global uint* next_ref_tri, __global float* next_ref_box,
     __global uint* small_ref_tri, __global float* small_ref_box, __global uint* small_ref_root,
-    __global uint* leaf_refs) {
+    __global uint* leaf_refs, __global float* side_box) {
     __local uint scratch[KDRAY_REDUCE_CHUNK];
+    __local int sent_key[2 * KDRAY_BOX_FLOATS]; /* per side: lo.xyz (min), hi.xyz (max) */
     const uint c = get_group_id(0), l = get_local_id(0), g = get_local_size(0);
     const uint chunks = a.chunks, refs = a.refs, slots = 2 * a.nodes;
     uint begin, end;
     const uint i =
         kd_chunk_references(c, node_ref_start, node_ref_count, node_chunk, a.nodes, &begin, &end);
     const uint start = node_ref_start[i];
+    KdBox sent[2];
+    sent[0].lo = sent[1].lo = (float3)(INFINITY);
+    sent[0].hi = sent[1].hi = (float3)(-INFINITY);
     if (split[i].axis == KDRAY_LEAF_AXIS) { /* the same for the whole group: no barrier skipped */
         const uint first =
             a.leaf_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LEAF_REFS, 2 * i) - start;
         for (uint r = begin + l; r < end; r += g) leaf_refs[first + r] = ref_tri[r];
+        if (l == 0) {
+            kd_store_box(side_box, c, sent[0]);
+            kd_store_box(side_box, chunks + c, sent[1]);
+        }
         return;
     }
+    for (uint k = l; k < 2 * KDRAY_BOX_FLOATS; k += g)
+        sent_key[k] = kd_ordered_key(k % KDRAY_BOX_FLOATS < 3 ? INFINITY : -INFINITY);
     uint dst[2], large[2], root[2];
     for (uint side = 0; side < 2; ++side) {
         const uint s = 2 * i + side;
@@ -235,6 +256,8 @@ __kernel void kd_distribute_chunk_groups(
                 const KdBox b = kd_load_box(sides & KDRAY_CLIPPED ? child_box : ref_box,
                                             sides & KDRAY_CLIPPED ? (size_t)side * refs + r : r);
                 const uint at = dst[side] + (side == 0 ? before & 0xFFFFu : before >> 16);
+                sent[side].lo = fmin(sent[side].lo, b.lo);
+                sent[side].hi = fmax(sent[side].hi, b.hi);
                 if (large[side]) {
                     next_ref_tri[at] = tri;
                     kd_store_box(next_ref_box, at, b);
@@ -247,6 +270,25 @@ __kernel void kd_distribute_chunk_groups(
         }
         dst[0] += total & 0xFFFFu;
         dst[1] += total >> 16;
+    }
+    /* The scans' barriers ordered sent_key's initialisation before this (a chunk has at least
+     * one round). */
+    for (uint side = 0; side < 2; ++side) {
+        __local int* key = sent_key + side * KDRAY_BOX_FLOATS;
+        if (sent[side].lo.x <= sent[side].hi.x) { /* not empty */
+            atomic_min(&key[0], kd_ordered_key(sent[side].lo.x));
+            atomic_min(&key[1], kd_ordered_key(sent[side].lo.y));
+            atomic_min(&key[2], kd_ordered_key(sent[side].lo.z));
+            atomic_max(&key[3], kd_ordered_key(sent[side].hi.x));
+            atomic_max(&key[4], kd_ordered_key(sent[side].hi.y));
+            atomic_max(&key[5], kd_ordered_key(sent[side].hi.z));
+        }
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (uint k = l; k < 2 * KDRAY_BOX_FLOATS; k += g) {
+        const uint side = k / KDRAY_BOX_FLOATS;
+        side_box[((size_t)side * chunks + c) * KDRAY_BOX_FLOATS + k % KDRAY_BOX_FLOATS] =
+            kd_key_float(sent_key[k]);
     }
 }
 
