@@ -55,7 +55,7 @@ struct LevelSplit {
     DeviceArray split;       // KdLargeSplit per node
     DeviceArray cuts;        // KdLargeCuts per node
     DeviceArray chunk_bins;  // SAH bin counts per reduction chunk (large_split_bins > 0)
-    DeviceArray chunk_rank;  // per chunk and side: references to that side, scanned
+    DeviceArray chunk_rank;  // per chunk and side: references to that side, then their rank
     DeviceArray slot_rank;   // KDRAY_SLOT_KINDS segments of 2 * nodes slots, scanned
 };
 
@@ -135,8 +135,8 @@ void decide_splits(BuildContext& ctx, const LargeLevel& level, bool force_leaf, 
                    s.chunk_bins.buffer(), s.split.buffer(), s.cuts.buffer());
 }
 
-/* Classify references, counted per chunk; one scan of the counts ranks the chunks. Then the
- * children's sizes and kinds, ranked by one scan over all slot kinds, and the level's one
+/* Classify references, counted per chunk. Then the children's sizes and kinds (and the chunks
+ * ranked within their nodes), ranked by one scan over all slot kinds, and the level's one
  * read-back: the totals of every slot kind. */
 LevelTotals classify_and_count(BuildContext& ctx, const LargeLevel& level,
                                const TriangleBounds& triangles, const KdLargeLevelArgs& args,
@@ -144,14 +144,13 @@ LevelTotals classify_and_count(BuildContext& ctx, const LargeLevel& level,
     const std::size_t refs = level.refs, chunks = level.chunks;
     keep_room<cl_uchar>(ctx, scratch.ref_sides, std::max<std::size_t>(refs, 4), "reference sides");
     keep_room<KdBuildBox>(ctx, scratch.child_box, 2 * refs, "reference child boxes");
-    s.chunk_rank = ctx.allocate<cl_uint>(2 * chunks + 1, "chunk ranks");
+    s.chunk_rank = ctx.allocate<cl_uint>(2 * chunks, "chunk ranks");
     enqueue_chunk_pass(ctx, ctx.kernels.classify, ctx.kernels.classify_groups, chunks, args,
                        level.ref_start.buffer(), level.ref_count.buffer(),
                        level.chunk_start.buffer(), level.ref_tri.buffer(), level.ref_box.buffer(),
                        triangles.triangles.buffer(), level.node.buffer(), s.split.buffer(),
                        scratch.ref_sides.buffer(), scratch.child_box.buffer(),
                        s.chunk_rank.buffer());
-    ctx.primitives.exclusive_scan(s.chunk_rank.buffer(), s.chunk_rank.buffer(), 2 * chunks);
 
     const std::size_t slots = 2 * std::size_t(level.nodes);
     const std::size_t slot_values = std::size_t(KDRAY_SLOT_KINDS) * slots;

@@ -8,16 +8,16 @@
  *   kd_bin_large_chunks        SAH bins of each reduction chunk (only with KDRAY_LARGE_BINS > 0)
  *   kd_split_large_nodes       empty-space cuts (a chain of them), then the binned SAH plane or
  *                              the spatial median, per node
- *   kd_classify_chunks         below/above per reference, counted per reduction chunk -> the
- *                              chunk counts, scanned
- *   kd_count_large_children    child sizes and kinds per node -> "slot" values, scanned
+ *   kd_classify_chunks         below/above per reference, counted per reduction chunk
+ *   kd_count_large_children    the node's chunk counts ranked within the node (in place),
+ *                              child sizes and kinds per node -> "slot" values, scanned
  *   kd_emit_large_children     node records, next level's large nodes, new small roots
  *   kd_distribute_chunks       references (clipped) into the next level / small roots / leaves,
  *                              and per chunk and side the union of the boxes it wrote
  *
  * The passes over the references go by reduction chunk (at most KDRAY_REDUCE_CHUNK references
  * of one node), one work-item each, in order: a reference's rank among its node's references
- * that go to the same child is its chunk's scanned count plus a running count, so no per-
+ * that go to the same child is its chunk's rank within the node plus a running count, so no per-
  * reference flags are written, scanned and read back. On the 2-core CPU the per-reference
  * version (flags, a scan over twice the references, child boxes for every reference) moved about
  * 260 bytes per reference and level, and the large stage was bound by memory.
@@ -225,8 +225,8 @@ KDRAY_HOT_INLINE uint2 kd_classify_references(uint begin, uint end, uint refs, c
 
 /* Classify chunk c's references (a leaf node's get no sides): ref_sides[r] as above, and the
  * chunk's counts of references going below (chunk_counts[c]) and above (chunk_counts[chunks +
- * c]), scanned afterwards. A reference lying flat in a large node's plane goes below (the
- * planar_sides of kd_classify). A box on one side of the plane keeps it; a straddling one becomes
+ * c]), ranked within the node by kd_count_large_children. A reference lying flat in a large
+ * node's plane goes below (the planar_sides of kd_classify). A box on one side of the plane keeps it; a straddling one becomes
  * the bounds of the triangle's part in each child (§4.1, at worst the box cut at the plane), and
  * a triangle that lies on one side within the node after all (a diagonal sliver) enters that
  * side only. Clipping here, once, rather than again when distributing, halved the clipping work
@@ -279,13 +279,15 @@ KDRAY_INLINE uint kd_slot_rank(__global const uint* slot_rank, uint slots, uint 
 /* Count each node's children and give every child its kind: more than T references stay large,
  * 1..T become small roots (§4.2), none an empty leaf. A split that separates nothing (both
  * children keep all references, e.g. a stack of coincident triangles) would recurse forever, so
- * the node becomes a leaf instead. */
+ * the node becomes a leaf instead. The node's chunk counts (classify's) become, in place, each
+ * chunk's rank within the node per side: what distribute adds its own running count to. A scan
+ * over all chunks of the level did that in 1-3 launches and a pass of its own; per node it is a
+ * loop over the node's chunks (432 at Kitchen's root, fewer below), no more work than the scan. */
 __kernel void kd_count_large_children(KdLargeLevelArgs a, __global const uint* node_ref_count,
                                       __global const uint* node_chunk,
                                       __global KdLargeSplit* split,
                                       __global const KdLargeCuts* chain,
-                                      __global const uint* chunk_rank,
-                                      __global uint* slot_values) {
+                                      __global uint* chunk_rank, __global uint* slot_values) {
     const uint i = get_global_id(0);
     const uint nodes = a.nodes, chunks = a.chunks;
     if (i >= nodes) return;
@@ -299,8 +301,13 @@ __kernel void kd_count_large_children(KdLargeLevelArgs a, __global const uint* n
     uint axis = split[i].axis;
     uint n[2] = {0, 0};
     if (axis != KDRAY_LEAF_AXIS) {
-        n[0] = chunk_rank[last] - chunk_rank[first];
-        n[1] = chunk_rank[chunks + last] - chunk_rank[chunks + first];
+        for (uint c = first; c < last; ++c) {
+            const uint below = chunk_rank[c], above = chunk_rank[chunks + c];
+            chunk_rank[c] = n[0];
+            chunk_rank[chunks + c] = n[1];
+            n[0] += below;
+            n[1] += above;
+        }
         if (n[0] == count && n[1] == count) {
             axis = KDRAY_LEAF_AXIS;
             split[i].axis = axis;
@@ -459,7 +466,7 @@ __kernel void kd_distribute_chunks(
     for (uint side = 0; side < 2; ++side) {
         const uint s = 2 * i + side;
         large[side] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s);
-        const uint within = chunk_rank[side * chunks + c] - chunk_rank[side * chunks + node_chunk[i]];
+        const uint within = chunk_rank[side * chunks + c];
         dst[side] = within + (large[side] ? kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s)
                                           : small_ref_base + kd_slot_rank(slot_rank, slots,
                                                                           KDRAY_SLOT_SMALL_REFS, s));

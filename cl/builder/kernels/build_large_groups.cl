@@ -236,7 +236,7 @@ __kernel void kd_distribute_chunk_groups(
     for (uint side = 0; side < 2; ++side) {
         const uint s = 2 * i + side;
         large[side] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s);
-        const uint within = chunk_rank[side * chunks + c] - chunk_rank[side * chunks + node_chunk[i]];
+        const uint within = chunk_rank[side * chunks + c];
         dst[side] = within + (large[side] ? kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s)
                                           : a.small_ref_base + kd_slot_rank(slot_rank, slots,
                                                                             KDRAY_SLOT_SMALL_REFS,
