@@ -1,7 +1,8 @@
 // test_opencl_primitives.cpp — the device layer and the parallel primitives of
 // cl/runtime/kernels/primitives.cl checked against std:: on random inputs, at the sizes where
 // chunked scans go wrong: empty, one element, powers of two and one either side, and sizes that
-// need several recursion levels.
+// need several recursion levels; 4096 and 4097 either side of the longest single-item scan on a
+// CPU.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -23,7 +24,7 @@ using namespace kdray;
 
 namespace {
 
-const std::size_t kSizes[] = {0, 1, 2, 255, 256, 257, 1000, 100003};
+const std::size_t kSizes[] = {0, 1, 2, 255, 256, 257, 1000, 4096, 4097, 100003};
 
 cl::Buffer upload(ClDevice& device, const std::vector<cl_uint>& v) {
     cl::Buffer b = device.allocate((v.size() + 1) * sizeof(cl_uint), "test input");

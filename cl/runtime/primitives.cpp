@@ -35,6 +35,11 @@ ClPrimitives::ClPrimitives(ClDevice& device, DeviceMemory* memory)
           return k;
       })) {}
 
+namespace {
+/// The longest scan one work-item does on a CPU device (exclusive_scan).
+constexpr std::size_t kCpuSingleScan = 4096;
+}  // namespace
+
 void ClPrimitives::exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, std::size_t n) {
     // The total goes to out[n]: a buffer of n entries would be written past its end, which no
     // CPU device notices (a scan of second-pass offsets did so until Oclgrind reported it).
@@ -48,7 +53,12 @@ void ClPrimitives::exclusive_scan(const cl::Buffer& in, const cl::Buffer& out, s
     // least 16 elements so the sequential loop amortises the launch, and one chunk for small n.
     const std::size_t lanes = std::max<std::size_t>(1, device_.info().compute_units) * 256;
     const std::size_t chunk = std::max<std::size_t>(16, (n + lanes - 1) / lanes);
-    if (n <= chunk) {
+    // On a CPU device one work-item scans a few thousand values in microseconds, less than the
+    // chunked scan's two launches and its recursion over the sums (a large level's slot scan of
+    // ~26k values made 7 launches, its sums' scans 5 of them). A GPU's single work-item walks
+    // memory at its latency: there only the shortest arrays are scanned so.
+    const std::size_t single_limit = device_.is_cpu() ? kCpuSingleScan : 16;
+    if (n <= std::max(chunk, single_limit)) {
         enqueue_kernel(device_, kernels_.scan_single, 1, in, out, cl_uint(n));
         return;
     }
