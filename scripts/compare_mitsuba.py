@@ -51,7 +51,8 @@ def venv_python(venv):
         return python, ""
     made = subprocess.run([sys.executable, "-m", "venv", venv], capture_output=True, text=True)
     if made.returncode != 0:
-        return None, f"python3 -m venv failed (Debian: apt install python3-venv): {made.stderr.strip()}"
+        return None, ("python3 -m venv failed (Debian: apt install python3-venv): "
+                      + made.stderr.strip())
     pip = subprocess.run([python, "-m", "pip", "install", "-q", MITSUBA, "numpy"],
                          capture_output=True, text=True)
     if pip.returncode != 0:

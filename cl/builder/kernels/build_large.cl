@@ -226,10 +226,10 @@ KDRAY_HOT_INLINE uint2 kd_classify_references(uint begin, uint end, uint refs, c
 /* Classify chunk c's references (a leaf node's get no sides): ref_sides[r] as above, and the
  * chunk's counts of references going below (chunk_counts[c]) and above (chunk_counts[chunks +
  * c]), ranked within the node by kd_count_large_children. A reference lying flat in a large
- * node's plane goes below (the planar_sides of kd_classify). A box on one side of the plane keeps it; a straddling one becomes
- * the bounds of the triangle's part in each child (§4.1, at worst the box cut at the plane), and
- * a triangle that lies on one side within the node after all (a diagonal sliver) enters that
- * side only. Clipping here, once, rather than again when distributing, halved the clipping work
+ * node's plane goes below (the planar_sides of kd_classify). A box on one side of the plane
+ * keeps it; a straddling one becomes the bounds of the triangle's part in each child (§4.1, at
+ * worst the box cut at the plane), and a triangle that lies on one side within the node after
+ * all (a diagonal sliver) enters that side only. Clipping here, once, rather than again when distributing, halved the clipping work
  * (10% of a kitchen build). */
 __kernel void kd_classify_chunks(KdLargeLevelArgs a, __global const uint* node_ref_start,
                                  __global const uint* node_ref_count,
@@ -467,9 +467,10 @@ __kernel void kd_distribute_chunks(
         const uint s = 2 * i + side;
         large[side] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s);
         const uint within = chunk_rank[side * chunks + c];
-        dst[side] = within + (large[side] ? kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s)
-                                          : small_ref_base + kd_slot_rank(slot_rank, slots,
-                                                                          KDRAY_SLOT_SMALL_REFS, s));
+        dst[side] = within + (large[side]
+                                  ? kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s)
+                                  : small_ref_base +
+                                        kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s));
         root[side] = small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
     }
     for (uint r = begin; r < end; ++r) {

@@ -237,16 +237,17 @@ __kernel void kd_distribute_chunk_groups(
         const uint s = 2 * i + side;
         large[side] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s);
         const uint within = chunk_rank[side * chunks + c];
-        dst[side] = within + (large[side] ? kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s)
-                                          : a.small_ref_base + kd_slot_rank(slot_rank, slots,
-                                                                            KDRAY_SLOT_SMALL_REFS,
-                                                                            s));
+        dst[side] = within + (large[side]
+                                  ? kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s)
+                                  : a.small_ref_base +
+                                        kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s));
         root[side] = a.small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
     }
     for (uint round = begin; round < end; round += g) {
         const uint r = round + l;
         const uint sides = r < end ? ref_sides[r] : 0u;
-        const uint flags = ((sides & KDRAY_BELOW) ? 1u : 0u) | ((sides & KDRAY_ABOVE) ? 0x10000u : 0u);
+        const uint flags =
+            ((sides & KDRAY_BELOW) ? 1u : 0u) | ((sides & KDRAY_ABOVE) ? 0x10000u : 0u);
         uint total;
         const uint before = kd_group_exclusive_scan(flags, scratch, &total);
         if (r < end) {
