@@ -1,7 +1,8 @@
 // test_hostile_round3_publish.cpp — issue #29, problem 16: a frame's files (image, AOV, heat map)
 // are put into place as one. When the folder changes under the run so that a later file cannot
 // be renamed into place, the files already renamed get their earlier versions back: kdray never
-// deletes a frame's earlier image that the folder's stats.json lists. Each runs the binary.
+// deletes a frame's earlier image that the folder's stats.json lists; and problem 10: a stats.json
+// is read within a budget of its own. Each runs the binary.
 #include <doctest/doctest.h>
 #include <fcntl.h>
 #include <linux/fs.h>
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "core/run/render_stats.h"
 #include "tests/support.h"
 
 namespace fs = std::filesystem;
@@ -104,5 +106,29 @@ TEST_CASE("an AOV name too long for the folder fails the frame before anything i
     check_error(render(obj, out, camera, {"--aov"}), 1, {stem + ".aov.exr", "name too long"});
     CHECK(read_file(out / (stem + ".png")) == image);
     CHECK(read_file(out / "stats.json") == stats);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a stats.json past the stats budget is refused before a run renders, naming it") {
+    // A 48 MB stats.json took 1.4 GB to parse and merge (std::bad_alloc, exit 134, under a
+    // memory limit), and the only bound was a quarter of the machine's memory. One byte past
+    // kMaxStatsBytes (a sparse file: nothing is written) is refused by its size, unread, by a
+    // run into the folder and by `kdray stats`.
+    const fs::path dir = fresh_temp_dir("round3-stats-budget");
+    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path obj = write_text_file(dir / "tri.obj", kTriangleObj);
+    const fs::path out = dir / "out";
+    fs::create_directories(out);
+    {
+        const int fd = ::open((out / "stats.json").c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
+        REQUIRE(fd >= 0);
+        REQUIRE(::ftruncate(fd, off_t(kdray::kMaxStatsBytes + 1)) == 0);
+        ::close(fd);
+    }
+    const std::string size = std::to_string(kdray::kMaxStatsBytes + 1) + " bytes, more than the ";
+    check_error(render(obj, out, camera), 1, {"stats.json: " + size, "move it away"});
+    CHECK_FALSE(fs::exists(out / "tri.png"));
+    check_error(run_kdray({"stats", out.string()}, kNoHang), 1, {"stats.json: " + size});
+    CHECK(fs::file_size(out / "stats.json") == kdray::kMaxStatsBytes + 1);
     fs::remove_all(dir);
 }
