@@ -74,6 +74,10 @@ int TextureLoader::load(const std::string& material, const std::string& statemen
                     (folder_.empty() ? std::string("the current directory") : folder_.string());
     else
         named.id = load_path(path, named.why);
+    if (named.id >= 0 && !named.why.empty())
+        // Loaded, with what the image library printed while it decoded the file.
+        scene_.warnings.push_back(where_ + ": material '" + material + "': " + statement + " '" +
+                                  file + "': " + named.why);
     if (named.id < 0) {
         named.name = file;
         named.first_material = material;
@@ -87,7 +91,8 @@ int TextureLoader::load(const std::string& material, const std::string& statemen
 }
 
 /// The texture of `path`, each file loaded once (names that differ but for case, or by a folder
-/// part, resolve to one file); -1 with `why` when it cannot be read.
+/// part, resolve to one file); -1 with `why` when it cannot be read, and `why` what the image
+/// library printed when it decoded the file with a complaint.
 int TextureLoader::load_path(const fs::path& path, std::string& why) {
     if (const auto it = loaded_.find(path); it != loaded_.end()) {
         why = it->second.second;
@@ -101,6 +106,8 @@ int TextureLoader::load_path(const fs::path& path, std::string& why) {
     DecodedImage image;
     try {
         image = read_image(path);
+        if (!image.library_messages.empty())
+            why = "the image library printed: " + image.library_messages;
     } catch (const Error& e) {
         return fail(e.what());
     }
