@@ -12,12 +12,14 @@
 #include <spdlog/sinks/base_sink.h>
 
 #include "cl/runtime/program_cache.h"
+#include "core/io/library_output.h"
 
 namespace kdray::cli {
 namespace {
 
-// One lock for the sink and the progress line: a message and a redraw never interleave.
-std::mutex stderr_mutex;
+// One lock for the sink and the progress line: a message and a redraw never interleave, and
+// none is taken into an image library's captured output (core/io/library_output.h).
+std::mutex& stderr_mutex = stderr_lock();
 std::string progress_text;  // what the progress line shows now; empty when none is shown
 // Set once a write to stderr failed (its reader went away: EPIPE, SIGPIPE being ignored; or a
 // full disk): the run goes on and finishes its outputs, without logging.

@@ -331,12 +331,20 @@ std::string shell_quote(const std::string& s) {
 
 }  // namespace
 
-CommandResult run_kdray(const std::vector<std::string>& args, int timeout_s) {
+std::string shell_quoted(const std::string& text) {
+    return shell_quote(text);
+}
+
+CommandResult run_kdray(const std::vector<std::string>& args, int timeout_s,
+                        const std::string& shell_setup) {
     std::filesystem::path dir = fresh_temp_dir("run");
-    std::string command = timeout_s > 0 ? "timeout -s KILL " + std::to_string(timeout_s) + " " : "";
+    // A subshell, its output redirected from outside: a `ulimit -n 5` in the setup would leave
+    // the shell no descriptor for its own redirections.
+    std::string command = "(" + shell_setup + (shell_setup.empty() ? "" : "; ") + "exec ";
+    command += timeout_s > 0 ? "timeout -s KILL " + std::to_string(timeout_s) + " " : "";
     command += shell_quote(KDRAY_BINARY);
     for (const std::string& a : args) command += " " + shell_quote(a);
-    command += " >" + shell_quote((dir / "out").string()) + " 2>" +
+    command += ") >" + shell_quote((dir / "out").string()) + " 2>" +
                shell_quote((dir / "err").string()) + " </dev/null";
     CommandResult r;
     int status = std::system(command.c_str());

@@ -115,8 +115,12 @@ void check_error(const CommandResult& r, int status, std::initializer_list<std::
 std::size_t line_count(const std::string& text);
 /// Runs the kdray binary built beside the tests with `args` (no shell expansion of them). With
 /// `timeout_s` > 0 a run that outlasts it is killed (status 137): a test of a hang fails, not
-/// hangs.
-CommandResult run_kdray(const std::vector<std::string>& args, int timeout_s = 0);
+/// hangs. `shell_setup`, where given, is shell commands run first in the same shell (a `ulimit`,
+/// an `export`): kdray inherits what they set, the test process does not.
+CommandResult run_kdray(const std::vector<std::string>& args, int timeout_s = 0,
+                        const std::string& shell_setup = "");
+/// `text` quoted for the shell (for a shell_setup).
+std::string shell_quoted(const std::string& text);
 
 /// A fresh, empty folder for one test, under the system's temporary folder.
 std::filesystem::path fresh_temp_dir(const std::string& name);

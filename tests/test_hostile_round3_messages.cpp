@@ -73,3 +73,38 @@ TEST_CASE("a warning quoting an MTL texture name with an escape sequence stays o
     CHECK(r.err.find("caf\xc3\xa9\\x1b[2J.png") != std::string::npos);
     fs::remove_all(dir);
 }
+
+TEST_CASE("a broken PNG is one kdray line, with no libpng line beside it") {
+    // libpng prints "libpng error: ..." on stderr by itself (OpenImageIO lets it through), even
+    // with --log-level quiet: a second line beside kdray's warning (render) or error (compare)
+    // about the same file, in no format a script expects. A PNG cut inside its image data makes
+    // libpng fail while it decodes, after the header was read and its size checked.
+    const fs::path dir = fresh_temp_dir("round3-libpng");
+    kdray::Image texture;
+    texture.width = texture.height = 8;
+    texture.rgb.resize(8 * 8 * 3);
+    for (std::size_t i = 0; i < texture.rgb.size(); ++i) texture.rgb[i] = float(i % 7) / 7.0f;
+    kdray::write_image(dir / "good.png", texture);
+    const std::string png = read_file(dir / "good.png");
+    REQUIRE(png.size() > 60);
+    write_text_file(dir / "cut.png", png.substr(0, png.size() - 20));
+    write_text_file(dir / "s.mtl", "newmtl t\nKd 1 1 1\nmap_Kd cut.png\n");
+    const fs::path obj = write_text_file(dir / "s.obj",
+                                         "mtllib s.mtl\nusemtl t\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                                         "vt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
+    const CommandResult r =
+        run_kdray({"render", obj.string(), "-o", (dir / "out").string(), "--builder", "reference",
+                   "--tracer", "reference", "--log-level", "quiet"},
+                  kNoHang);
+    CHECK(r.status == 0);
+    check_one_printable_line(r.err, "kdray: warning: ");
+    CHECK(r.err.find("cut.png") != std::string::npos);
+    CHECK(r.err.find("renders untextured") != std::string::npos);
+
+    const CommandResult compared =
+        run_kdray({"compare", (dir / "cut.png").string(), (dir / "good.png").string()}, kNoHang);
+    CHECK(compared.status == 1);
+    check_one_printable_line(compared.err, "kdray: error: ");
+    CHECK(compared.err.find("cut.png") != std::string::npos);
+    fs::remove_all(dir);
+}

@@ -121,3 +121,52 @@ TEST_CASE("map_Kd options kdray does not simulate are named in one warning") {
     CHECK(r.err.empty());
     fs::remove_all(plain.dir);
 }
+
+TEST_CASE("a render-file key given twice is refused, naming the file and the key") {
+    // nlohmann::json kept the last of two equal keys, Python's json (the schema check) too, and
+    // other readers keep the first: `"spp": 1, ..., "spp": 64` rendered at 64 spp while an editor
+    // might show 1. Keys inside arrays (a light, a camera key) are named with their index, and
+    // the same key in two different objects is no duplicate.
+    struct Case {
+        const char* extra;
+        const char* key;
+    };
+    const Case cases[] = {
+        {R"("max_depth":4,"max_depth":6,)", "'max_depth'"},
+        {R"("lights":[{"type":"point"},{"type":"point","position":[0,0,1],"position":[0,1,1]}],)",
+         "'lights[1].position'"},
+        {R"("ambient":0.1,"lights":[{"type":"point"}],"ambient":0.2,)", "'ambient'"},
+    };
+    for (const Case& c : cases) {
+        CAPTURE(c.extra);
+        const Quad q = quad("round3-duplicate-key", "map_Kd tex.png", c.extra);
+        check_error(render(q), 1, {"cam.json", c.key, "twice"});
+        CHECK_FALSE(fs::exists(q.dir / "out" / "quad.png"));
+        fs::remove_all(q.dir);
+    }
+    const Quad q = quad("round3-distinct-keys", "map_Kd tex.png",
+                        R"("lights":[{"type":"point","position":[0,0,3]},)"
+                        R"({"type":"point","position":[1,0,3]}],)");
+    const CommandResult r = render(q);
+    INFO("stderr: " << r.err);
+    CHECK(r.status == 0);
+    fs::remove_all(q.dir);
+}
+
+TEST_CASE("a stats.json key given twice is refused before the run renders") {
+    // The folder's stats.json is read back and merged into: a record whose "frame" is given twice
+    // means one frame to kdray and another to a script reading the file.
+    const Quad q = quad("round3-duplicate-stats", "map_Kd tex.png");
+    REQUIRE(render(q).status == 0);
+    const fs::path out = q.dir / "out";
+    std::string stats = read_file(out / "stats.json");
+    const std::size_t frame = stats.find("\"frame\": 0");
+    REQUIRE(frame != std::string::npos);
+    stats.insert(frame, "\"frame\": 7, ");
+    write_text_file(out / "stats.json", stats);
+    fs::remove(out / "quad.png");
+    check_error(render(q), 1, {"stats.json", "frame", "twice"});
+    CHECK_FALSE(fs::exists(out / "quad.png"));
+    check_error(run_kdray({"stats", out.string()}, kNoHang), 1, {"stats.json", "frame", "twice"});
+    fs::remove_all(q.dir);
+}

@@ -16,8 +16,9 @@
 #include <unistd.h>
 
 #include "cl/runtime/cl_error.h"
-#include "cl/runtime/work_group.h"
+#include "cl/runtime/driver_environment.h"
 #include "cl/runtime/program_cache.h"
+#include "cl/runtime/work_group.h"
 #include "core/error.h"
 
 namespace kdray {
@@ -65,6 +66,7 @@ struct FoundDevice {
 
 std::vector<FoundDevice> find_devices() {
     ensure_writable_kernel_cache();
+    ensure_open_file_limit();
     std::vector<cl::Platform> platforms;
     // The ICD loader reports "no platform" as an error code (CL_PLATFORM_NOT_FOUND_KHR) rather than
     // an empty list.
@@ -76,10 +78,8 @@ std::vector<FoundDevice> find_devices() {
         status = e.err();
     }
     if (status != CL_SUCCESS || platforms.empty())
-        throw Error(
-            "no OpenCL platform found (clGetPlatformIDs: " + cl_error_name(status) +
-            "). Install an OpenCL implementation, e.g. PoCL for the CPU: "
-            "`apt-get install pocl-opencl-icd ocl-icd-opencl-dev`, or your GPU vendor's driver");
+        throw Error(no_device_message(
+            "no OpenCL platform found (clGetPlatformIDs: " + cl_error_name(status) + ")"));
     std::vector<FoundDevice> found;
     for (const cl::Platform& platform : platforms) {
         std::vector<cl::Device> devices;
@@ -171,9 +171,7 @@ ClDevice::ClDevice(const std::string& selector)
     with_cl_context("opening OpenCL device '" + selector + "'", [&] {
         std::vector<FoundDevice> found = find_devices();
         if (found.empty())
-            throw Error(
-                "OpenCL platforms exist but have no devices. Install an OpenCL implementation, "
-                "e.g. `apt-get install pocl-opencl-icd ocl-icd-opencl-dev`");
+            throw Error(no_device_message("OpenCL platforms exist but have no devices"));
         const FoundDevice* chosen = nullptr;
         if (selector.empty()) {
             for (const FoundDevice& f : found)

@@ -110,6 +110,10 @@ namespace {
 void check_replaceable(const fs::path& path) {
     std::error_code ec;
     const fs::file_status existing = fs::symlink_status(path, ec);
+    // A name the folder cannot hold (too long, a path through a file) fails here, before
+    // anything is written, rather than at its rename with the set's other files in place.
+    if (ec && ec != std::errc::no_such_file_or_directory)
+        throw Error(path.string() + ": cannot write there: " + ec.message());
     if (fs::exists(existing) && !fs::is_regular_file(existing))
         throw Error(path.string() + ": exists and is " + file_type_name(existing.type()) +
                     "; kdray replaces only regular files");
@@ -165,20 +169,67 @@ void write_file_atomically(const fs::path& path, std::string_view bytes) {
 void write_files_atomically(const std::vector<FileContent>& files) {
     for (const FileContent& file : files) check_replaceable(file.path);
     std::vector<fs::path> temps;
-    std::size_t renamed = 0;
     try {
         for (const FileContent& file : files) {
             temps.push_back(temporary_path(file.path));
             write_new_file(temps.back(), file.path, file.bytes);
         }
-        for (; renamed < files.size(); ++renamed)
-            rename_into_place(temps[renamed], files[renamed].path);
     } catch (...) {
         std::error_code ignored;
-        for (std::size_t i = 0; i < temps.size(); ++i)
-            fs::remove(i < renamed ? files[i].path : temps[i], ignored);
+        for (const fs::path& temp : temps) fs::remove(temp, ignored);
         throw;
     }
+
+    // The targets' earlier files, each kept under a second name (a hard link, no copy) until
+    // every rename is done: a rename that fails after others succeeded (the folder changed under
+    // the run) puts the earlier files back, instead of leaving a set of mixed runs, or deleting
+    // a file that a stats.json lists.
+    enum class Earlier { None, Kept, Unkept };
+    std::vector<Earlier> earlier(files.size(), Earlier::None);
+    std::vector<fs::path> backups(files.size());
+    // One file's rename is all or nothing by itself.
+    for (std::size_t i = 0; files.size() > 1 && i < files.size(); ++i) {
+        backups[i] = temporary_path(files[i].path);
+        if (::link(files[i].path.c_str(), backups[i].c_str()) == 0)
+            earlier[i] = Earlier::Kept;
+        else if (errno != ENOENT)
+            earlier[i] = Earlier::Unkept;  // a file system without hard links, say
+    }
+    auto drop_backups = [&] {
+        std::error_code ignored;
+        for (std::size_t i = 0; i < files.size(); ++i)
+            if (earlier[i] == Earlier::Kept) fs::remove(backups[i], ignored);
+    };
+
+    std::size_t renamed = 0;
+    try {
+        for (; renamed < files.size(); ++renamed)
+            rename_into_place(temps[renamed], files[renamed].path);
+    } catch (const Error& e) {
+        std::error_code ignored;
+        for (std::size_t i = renamed; i < files.size(); ++i) fs::remove(temps[i], ignored);
+        std::string outcome;
+        for (std::size_t i = 0; i < renamed; ++i) {
+            const fs::path& path = files[i].path;
+            std::error_code ec;
+            if (earlier[i] == Earlier::Kept)
+                fs::rename(backups[i], path, ec);
+            else if (earlier[i] == Earlier::None)
+                fs::remove(path, ec);  // this run's own file, where there was none
+            // Never a deletion of what the folder held: a file that cannot be put back stays
+            // this run's, and the message says so.
+            if (earlier[i] == Earlier::Unkept || ec)
+                outcome += "; " + path.string() + " is this run's new file (the earlier one " +
+                           (ec ? "could not be put back: " + ec.message()
+                               : std::string("could not be kept")) +
+                           ")";
+            else
+                outcome += "; " + path.string() + " is as it was";
+        }
+        drop_backups();
+        throw Error(e.what() + outcome);
+    }
+    drop_backups();
 }
 
 void remove_stale_temporaries(const fs::path& dir) {

@@ -37,9 +37,13 @@ struct FileContent {
 /// Files that belong together (a frame's image and its AOV) written as one: every target is
 /// checked as write_atomically checks it, then every file is written under its temporary name,
 /// and only when all are written are they renamed into place, in the order given. A failure
-/// before the renames (a full disk, a directory where one goes) leaves every target as it was;
-/// a failed rename (which the checks leave unlikely) removes those already renamed, so that no
-/// part of the set is left beside older files of the others.
+/// before the renames (a full disk, a directory where one goes) leaves every target as it was.
+/// A failed rename (the folder changed under the run: a target made immutable, the folder's
+/// permissions) puts back the earlier files of those already renamed, kept under a second name
+/// (a hard link) until every rename is done, and removes this call's files where there were
+/// none; so no part of the set is left beside older files of the others, and nothing the folder
+/// held is lost. Where an earlier file cannot be put back (no hard links, or the folder changed
+/// again) this call's file stays in its place, never nothing, and the Error names it.
 void write_files_atomically(const std::vector<FileContent>& files);
 
 /// Removes the temporary files that a kdray process killed mid-write (SIGKILL, a power cut) left

@@ -44,6 +44,9 @@ struct DecodedImage {
     int width = 0, height = 0, channels = 0;
     bool integer = false;
     std::vector<float> values;
+    /// What the image library printed on stderr while it decoded the image (libpng's warnings),
+    /// captured for kdray's own message; empty when it printed nothing.
+    std::string library_messages;
 };
 
 /// "oiio" or "small": the implementation linked.

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/io/image_codec.h"
 #include "core/io/input_file.h"
+#include "core/io/library_output.h"
 
 namespace kdray {
 namespace {
@@ -110,7 +111,9 @@ std::string encode_exr(const ExrImage& image) {
     });
 }
 
-ExrImage read_exr(const std::filesystem::path& path) {
+namespace {
+
+ExrImage read_exr_file(const std::filesystem::path& path) {
     const OpenedImage opened(path);
     OIIO::ImageInput* in = opened.in.get();
     const OIIO::ImageSpec& spec = in->spec();
@@ -135,18 +138,30 @@ ExrImage read_exr(const std::filesystem::path& path) {
     return result;
 }
 
+}  // namespace
+
+ExrImage read_exr(const std::filesystem::path& path) {
+    ExrImage result;
+    // An EXR library's lines on stderr (OpenEXR prints none that kdray has seen) join the Error.
+    capture_stderr([&] { result = read_exr_file(path); });
+    return result;
+}
+
 DecodedImage read_image(const std::filesystem::path& path) {
-    const OpenedImage opened(path);
-    OIIO::ImageInput* in = opened.in.get();
-    const OIIO::ImageSpec spec = in->spec();
     DecodedImage result;
-    result.width = spec.width;
-    result.height = spec.height;
-    result.channels = spec.nchannels;
-    result.integer = !spec.format.is_floating_point();
-    result.values.resize(std::size_t(spec.width) * spec.height * spec.nchannels);
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, result.values.data()))
-        throw Error("cannot read " + path.string() + ": " + in->geterror());
+    // libpng's own "libpng error:" lines become part of the Error, or of library_messages.
+    result.library_messages = capture_stderr([&] {
+        const OpenedImage opened(path);
+        OIIO::ImageInput* in = opened.in.get();
+        const OIIO::ImageSpec spec = in->spec();
+        result.width = spec.width;
+        result.height = spec.height;
+        result.channels = spec.nchannels;
+        result.integer = !spec.format.is_floating_point();
+        result.values.resize(std::size_t(spec.width) * spec.height * spec.nchannels);
+        if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, result.values.data()))
+            throw Error("cannot read " + path.string() + ": " + in->geterror());
+    });
     return result;
 }
 

@@ -8,6 +8,8 @@
 #include <cerrno>
 #include <cstring>
 #include <limits>
+#include <unordered_set>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -116,18 +118,71 @@ void check_image_size(const std::string& name, std::int64_t width, std::int64_t 
 
 nlohmann::json parse_json(std::string_view text, const std::string& name) {
     using nlohmann::json;
+    // Where the parse is: the open objects and arrays, outermost first, each object with the
+    // keys it has had and its latest, each array with the number of elements it has had. A key
+    // given twice is refused: nlohmann keeps the last one, Python's json too, other readers the
+    // first, so the file means different things to kdray, its schema and the user's editor.
+    struct Open {
+        bool object = false;
+        std::unordered_set<std::string> keys;
+        std::string key;
+        std::size_t elements = 0;
+    };
+    std::vector<Open> open;
+    // Appended piece by piece: GCC 12 warns falsely (-Wstringop-overflow) on "." + std::string.
+    auto where = [&](const std::string& last) {
+        std::string path;
+        for (std::size_t i = 0; i < open.size(); ++i) {
+            const bool object = i + 1 == open.size() || open[i].object;
+            if (object && !path.empty()) path += '.';
+            if (i + 1 == open.size()) {
+                path += last;
+            } else if (object) {
+                path += open[i].key;
+            } else {
+                path += '[';
+                path += std::to_string(open[i].elements);
+                path += ']';
+            }
+        }
+        return path;
+    };
+    // An element of the innermost open array is complete.
+    auto element_done = [&] {
+        if (!open.empty() && !open.back().object) ++open.back().elements;
+    };
     // The callback sees each array or object start with the depth of its parent: refusing there
     // stops the parse before the deep value exists.
-    const json::parser_callback_t bound_depth = [&](int depth, json::parse_event_t event, json&) {
-        const bool opens =
-            event == json::parse_event_t::object_start || event == json::parse_event_t::array_start;
-        if (opens && depth >= kMaxJsonDepth)
-            throw Error(name + ": JSON nested more than " + std::to_string(kMaxJsonDepth) +
-                        " levels deep; kdray's files nest a few levels");
+    const json::parser_callback_t check = [&](int depth, json::parse_event_t event, json& parsed) {
+        switch (event) {
+            case json::parse_event_t::object_start:
+            case json::parse_event_t::array_start:
+                if (depth >= kMaxJsonDepth)
+                    throw Error(name + ": JSON nested more than " + std::to_string(kMaxJsonDepth) +
+                                " levels deep; kdray's files nest a few levels");
+                open.push_back(Open{event == json::parse_event_t::object_start, {}, {}, 0});
+                break;
+            case json::parse_event_t::key: {
+                Open& object = open.back();
+                object.key = parsed.get<std::string>();
+                if (!object.keys.insert(object.key).second)
+                    throw Error(name + ": field '" + where(object.key) +
+                                "' is given twice; each key of a JSON object may appear once");
+                break;
+            }
+            case json::parse_event_t::object_end:
+            case json::parse_event_t::array_end:
+                open.pop_back();
+                element_done();
+                break;
+            case json::parse_event_t::value:
+                element_done();
+                break;
+        }
         return true;
     };
     try {
-        return json::parse(text.begin(), text.end(), bound_depth);
+        return json::parse(text.begin(), text.end(), check);
     } catch (const json::parse_error& e) {
         // nlohmann's message begins with "[json.exception.parse_error.101] "; drop the tag.
         std::string what = e.what();

@@ -49,8 +49,9 @@ void check_image_size(const std::string& name, std::int64_t width, std::int64_t 
 inline constexpr int kMaxJsonDepth = 64;
 
 /// `text` parsed as JSON. Throws Error "NAME: invalid JSON at byte N: WHAT" on a syntax error,
-/// "NAME: invalid JSON: WHAT" on a value JSON cannot hold, and "NAME: JSON nested more than 64
-/// levels deep" past kMaxJsonDepth, before anything deeper is built.
+/// "NAME: invalid JSON: WHAT" on a value JSON cannot hold, "NAME: JSON nested more than 64
+/// levels deep" past kMaxJsonDepth, before anything deeper is built, and "NAME: field 'PATH' is
+/// given twice" for a key that appears twice in one object (PATH as `lights[1].type`).
 nlohmann::json parse_json(std::string_view text, const std::string& name);
 
 }  // namespace kdray

@@ -67,9 +67,15 @@ bool record_before(const nlohmann::json& a, const nlohmann::json& b) {
 
 }  // namespace
 
+std::uint64_t stats_size_limit() {
+    return std::min(kMaxStatsBytes, input_size_limit() / 8);
+}
+
 nlohmann::json read_render_stats(const std::filesystem::path& file) {
-    const nlohmann::json stats =
-        parse_json(read_input_file(file, "stats.json file"), file.string());
+    nlohmann::json parsed =
+        parse_json(read_input_file(file, "stats.json file", stats_size_limit()), file.string());
+    // Checked through a const view: operator[] on the object itself would add missing keys.
+    const nlohmann::json& stats = parsed;
     if (!stats.is_object() || !stats.contains("summary") || !stats.contains("frames") ||
         !stats["frames"].is_array())
         throw Error(file.string() + ": not a kdray stats file (no summary or frames)");
@@ -114,7 +120,7 @@ nlohmann::json read_render_stats(const std::filesystem::path& file) {
             check_names(failure, where);
         }
     }
-    return stats;
+    return parsed;
 }
 
 nlohmann::json read_folder_stats(const std::filesystem::path& dir) {
@@ -192,12 +198,18 @@ FolderMerge merge_into_folder(const std::filesystem::path& dir, nlohmann::json r
 }
 
 std::vector<nlohmann::json> frames_by_run(const nlohmann::json& frames) {
-    // Each run's frames in frame order: its first is the one that built the programs.
+    // Each run's frames in frame order: its first is the one that built the programs. Only what
+    // summarise_runs reads is copied: a whole copy of every record doubled the memory a large
+    // stats.json took.
     std::map<std::size_t, nlohmann::json> by_run;
     for (const nlohmann::json& frame : frames) {
         nlohmann::json& group = by_run[frame.value("run", std::size_t(0))];
         if (group.is_null()) group = nlohmann::json::array();
-        group.push_back(frame);
+        nlohmann::json summary = nlohmann::json::object();
+        for (const char* key : {"frame", "image", "input", "frame_ms", "load_wait_ms", "compile_ms",
+                                "build_ms", "trace_ms", "write_ms"})
+            if (const auto it = frame.find(key); it != frame.end()) summary[key] = *it;
+        group.push_back(std::move(summary));
     }
     std::vector<nlohmann::json> groups;
     for (auto& [index, group] : by_run) {
@@ -207,14 +219,16 @@ std::vector<nlohmann::json> frames_by_run(const nlohmann::json& frames) {
     return groups;
 }
 
-nlohmann::json merge_render_stats(const nlohmann::json& previous, nlohmann::json run) {
-    // The earlier runs: a file written before runs were recorded is one run.
+nlohmann::json merge_render_stats(nlohmann::json previous, nlohmann::json run) {
+    // The earlier runs: a file written before runs were recorded is one run. Their records are
+    // moved, not copied, out of `previous`: copies made a large stats.json's merge cost several
+    // times its parse.
     nlohmann::json runs = nlohmann::json::array();
     std::vector<nlohmann::json> frames;
     nlohmann::json failures = nlohmann::json::array();
     if (previous.is_object()) {
         if (previous.contains("runs")) {
-            runs = previous["runs"];
+            runs = std::move(previous["runs"]);
         } else {
             nlohmann::json only = settings_of(previous);
             only["frames_rendered"] = nlohmann::json::array();
@@ -222,11 +236,12 @@ nlohmann::json merge_render_stats(const nlohmann::json& previous, nlohmann::json
                 only["frames_rendered"].push_back(frame_number(f));
             runs.push_back(std::move(only));
         }
-        for (nlohmann::json frame : previous.value("frames", nlohmann::json::array())) {
-            if (!frame.contains("run")) frame["run"] = 0;
-            frames.push_back(std::move(frame));
-        }
-        failures = previous.value("failed_frames", nlohmann::json::array());
+        if (previous.contains("frames"))
+            for (nlohmann::json& frame : previous["frames"]) {
+                if (!frame.contains("run")) frame["run"] = 0;
+                frames.push_back(std::move(frame));
+            }
+        if (previous.contains("failed_frames")) failures = std::move(previous["failed_frames"]);
     }
 
     // This run's records replace the earlier records of their frames, and its failures the
@@ -265,7 +280,8 @@ nlohmann::json merge_render_stats(const nlohmann::json& previous, nlohmann::json
 
     nlohmann::json merged = std::move(settings);
     merged["runs"] = std::move(runs);
-    merged["frames"] = frames;
+    merged["frames"] = nlohmann::json::array();
+    for (nlohmann::json& frame : frames) merged["frames"].push_back(std::move(frame));
     merged["summary"] = summarise_runs(frames_by_run(merged["frames"]));
     // One folder holds one record per image: scenes rendered one by one into it share frame 0.
     merged["summary"].erase("warning");

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <set>
 #include <string>
@@ -19,6 +20,15 @@
 #include <nlohmann/json.hpp>
 
 namespace kdray {
+
+/// The largest stats.json kdray reads: 256 MiB, or an eighth of the input budget
+/// (input_size_limit(), a quarter of the machine's memory) where that is less. A parsed file
+/// takes about 7 to 9 times its size in memory (a 54 MB file of 16,000 records: 0.37 GB for
+/// `kdray stats`, 0.45 GB for a run merging into it), so an unbounded one ran out of memory
+/// (std::bad_alloc, exit 134) before the run rendered. A frame's record takes about 3.4 KB, so
+/// 256 MiB holds some 80,000 frames.
+inline constexpr std::uint64_t kMaxStatsBytes = std::uint64_t(256) << 20;
+std::uint64_t stats_size_limit();
 
 /// `file` (a stats.json) read and checked as the summary reads it: an object with "frames" (each
 /// an object, its frame number a count, its times numbers) and "summary". Throws Error naming the
@@ -45,7 +55,8 @@ struct FolderMerge {
 FolderMerge merge_into_folder(const std::filesystem::path& dir, nlohmann::json run);
 
 /// `frames` (a stats.json's frame records) grouped by the run that rendered them ("run"; none:
-/// run 0), each group in frame order: summarise_runs's input for one folder.
+/// run 0), each group in frame order: summarise_runs's input for one folder (each record cut to
+/// the keys it reads).
 std::vector<nlohmann::json> frames_by_run(const nlohmann::json& frames);
 
 /// The folder's stats.json after a run: `previous` (the file as it was; null when there was none)
@@ -55,6 +66,6 @@ std::vector<nlohmann::json> frames_by_run(const nlohmann::json& frames);
 /// which it did not replace), and the
 /// summary recomputed over every frame, each run's first frame counted as a first
 /// (summarise_runs). `run`'s other keys are its settings.
-nlohmann::json merge_render_stats(const nlohmann::json& previous, nlohmann::json run);
+nlohmann::json merge_render_stats(nlohmann::json previous, nlohmann::json run);
 
 }  // namespace kdray
