@@ -27,7 +27,8 @@ std::vector<ProgramSpec> buildable_programs(bool cpu_device, bool correctly_roun
 
     // Renderer: every set of KDRAY_EFFECT_* bits, each triangle test, and packets where
     // choose_opencl_render puts them by default (CPU devices, watertight test; --packets off
-    // leaves them out there). `--packets on` on a GPU is left out: a CPU-only path there.
+    // leaves them out there), at each width (render_packet_lanes: 8 on AVX2, 16 on AVX-512, or
+    // KDRAY_PACKET_LANES). `--packets on` on a GPU is left out: a CPU-only path there.
     constexpr kd_u32 kAllEffects = KDRAY_EFFECT_SHADOWS | KDRAY_EFFECT_REFLECTION |
                                    KDRAY_EFFECT_REFRACTION | KDRAY_EFFECT_AMBIENT |
                                    KDRAY_EFFECT_AREA_LIGHTS | KDRAY_EFFECT_TEXTURES;
@@ -46,7 +47,10 @@ std::vector<ProgramSpec> buildable_programs(bool cpu_device, bool correctly_roun
             }
             choice.packets = true;
             if (cpu_device && intersect == KDRAY_INTERSECT_WATERTIGHT)
-                add("render.cl", render_program_defines(choice, correctly_rounded_divide_sqrt));
+                for (kd_u32 lanes : {8u, 16u}) {
+                    choice.packet_lanes = lanes;
+                    add("render.cl", render_program_defines(choice, correctly_rounded_divide_sqrt));
+                }
         }
     return programs;
 }

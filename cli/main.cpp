@@ -277,9 +277,10 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     render_app
         ->add_option("--packets", render.packets,
-                     "OpenCL tracer: trace primary rays in packets of 16 (4x4 pixels) on the "
-                     "device's SIMD lanes; auto: on CPU devices (watertight test only; the hits "
-                     "are the same)")
+                     "OpenCL tracer: trace primary rays in packets of the device's float width "
+                     "(16 rays, 4x4 pixels, on AVX-512; 8, 4x2, on AVX2; KDRAY_PACKET_LANES=8|16 "
+                     "overrides) on its SIMD lanes; auto: on CPU devices (watertight test only; "
+                     "the hits are the same)")
         ->check(CLI::IsMember({"auto", "on", "off"}))
         ->capture_default_str();
     render_app->option_defaults()->group("Frames");

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "cl/renderer/opencl_renderer.h"
 #include "core/device/kd_render.h"
@@ -44,19 +45,22 @@ inline double ulps_from(float t, long double exact) {
 }
 
 /// Renders 300 needles (test::needle_bundle, 96x72 pixels) on the OpenCL test device, one ray at
-/// a time and in packets, with whatever exact arithmetic the program was built for; every pixel
-/// must hit brute force's triangle, at a distance within 4 ulps of the exact one.
+/// a time and in packets of 8 and 16 lanes (which refine lane by lane), with whatever exact
+/// arithmetic the program was built for; every pixel must hit brute force's triangle, at a distance
+/// within 4 ulps of the exact one.
 inline void check_needle_distances() {
     const Scene scene = needle_bundle(300, 6);
     const KdTree tree = build_reference(scene);
     RenderSettings settings;
     settings.width = 96;
     settings.height = 72;
-    for (RenderInputs::Packets packets : {RenderInputs::Packets::Off, RenderInputs::Packets::On}) {
-        CAPTURE(packets == RenderInputs::Packets::On);
+    for (unsigned lanes : {0u, 8u, 16u}) {
+        CAPTURE(lanes);
+        const ScopedEnv width("KDRAY_PACKET_LANES", lanes ? std::to_string(lanes) : "");
         RenderInputs inputs = prepare_render(scene, settings, needle_bundle_camera(), 0);
-        inputs.packets = packets;
+        inputs.packets = lanes ? RenderInputs::Packets::On : RenderInputs::Packets::Off;
         const FrameResult device = render_opencl(opencl_test_device(), tree, scene, inputs);
+        REQUIRE(device.packet_lanes == lanes);
         int hits = 0, other_triangle = 0;
         double worst_ulps = 0;
         for (int y = 0; y < settings.height; ++y)

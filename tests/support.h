@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <initializer_list>
 #include <optional>
@@ -138,5 +139,19 @@ std::filesystem::path write_obj(const std::filesystem::path& path, const Scene& 
 /// The repository root (for testdata/) and ../shared beside it (may not exist).
 std::filesystem::path source_dir();
 std::filesystem::path shared_dir();
+
+/// An environment variable set for the guard's life (this process and the kdray it runs), then
+/// unset: KDRAY_PACKET_LANES, KDRAY_FORCE_NO_FP64 and the like.
+struct ScopedEnv {
+    ScopedEnv(const char* name, const std::string& value) : name_(name) {
+        ::setenv(name, value.c_str(), 1);
+    }
+    ~ScopedEnv() { ::unsetenv(name_); }
+    ScopedEnv(const ScopedEnv&) = delete;
+    ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+  private:
+    const char* name_;
+};
 
 }  // namespace kdray::test

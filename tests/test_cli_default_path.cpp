@@ -210,3 +210,49 @@ TEST_CASE("stats.json records whether packets traced, not only what --packets as
     }
     fs::remove_all(dir);
 }
+
+TEST_CASE("packets at 8 and 16 lanes write the AOV and image of one ray at a time, bit for bit") {
+    // 37 x 29 pixels under a light: 4x2 and 4x4 tiles cut by the right and bottom edges, shadow
+    // packets too. KDRAY_PACKET_LANES picks the width; stats.json says which ran.
+    const fs::path dir = fresh_temp_dir("cli-default-packet-lanes");
+    const Scene scene = random_triangles(300, 35);
+    const fs::path obj = write_obj(dir / "scene.obj", scene);
+    const fs::path render = write_text_file(dir / "render.json", R"({
+  "image": {"width": 37, "height": 29},
+  "camera": {"position": [0.5, 0.5, 3], "look_at": [0.5, 0.5, 0.5], "up": [0, 1, 0], "fov_y": 50},
+  "lights": [{"type": "point", "position": [0.5, 3, 2], "intensity": [10, 10, 10]}]
+})");
+    struct Output {
+        std::string aov, image;
+    };
+    auto run = [&](const std::string& lanes, const std::string& packets) {
+        const ScopedEnv width("KDRAY_PACKET_LANES", lanes);
+        const fs::path out = dir / ("out-" + packets + lanes);
+        const CommandResult r =
+            run_kdray({"render", obj.string(), "--camera", render.string(), "-o", out.string(),
+                       "--aov", "--packets", packets, "-q"});
+        REQUIRE_MESSAGE(r.status == 0, r.err);
+        std::ifstream in(out / "stats.json");
+        const nlohmann::json packets_ran = nlohmann::json::parse(in)["frames"][0]["packets"];
+        CHECK(packets_ran["primary"] == (packets == "on"));
+        CHECK(packets_ran["shadow"] == (packets == "on"));
+        CHECK(packets_ran["lanes"] == (packets == "on" ? std::stoi(lanes) : 0));
+        return Output{read_file(out / "scene.aov.exr"), read_file(out / "scene.png")};
+    };
+    const Output scalar = run("", "off");
+    REQUIRE(!scalar.aov.empty());
+    for (const char* lanes : {"8", "16"}) {
+        CAPTURE(lanes);
+        const Output packets = run(lanes, "on");
+        CHECK(packets.aov == scalar.aov);
+        CHECK(packets.image == scalar.image);
+    }
+    // Any other width is refused, with the variable named.
+    {
+        const ScopedEnv width("KDRAY_PACKET_LANES", "12");
+        check_error(run_kdray({"render", obj.string(), "--camera", render.string(), "-o",
+                               (dir / "out-12").string(), "--packets", "on", "-q"}),
+                    1, {"KDRAY_PACKET_LANES", "8 or 16"});
+    }
+    fs::remove_all(dir);
+}

@@ -82,14 +82,16 @@ TEST_CASE("opencl float-float: hits equal brute force and the reference on the h
         RenderSettings settings;
         settings.width = 40;
         settings.height = 30;
-        for (RenderInputs::Packets packets :
-             {RenderInputs::Packets::Off, RenderInputs::Packets::Auto}) {
-            CAPTURE(packets == RenderInputs::Packets::Auto);
+        // One ray at a time, and packets of 8 and 16 lanes (4x2 and 4x4 tiles).
+        for (unsigned lanes : {0u, 8u, 16u}) {
+            CAPTURE(lanes);
+            const test::ScopedEnv width("KDRAY_PACKET_LANES", lanes ? std::to_string(lanes) : "");
             RenderInputs inputs =
                 prepare_render(s.scene, settings, s.camera ? *s.camera : skew_camera(s.scene), 0);
-            inputs.packets = packets;
+            inputs.packets = lanes ? RenderInputs::Packets::On : RenderInputs::Packets::Off;
             const FrameResult device =
                 render_opencl(test::opencl_test_device(), tree, s.scene, inputs);
+            REQUIRE(device.packet_lanes == lanes);
             const FrameResult host = render_reference(tree, s.scene, inputs, 1);
             int against_brute = 0, against_reference = 0, hits = 0, other_t = 0;
             for (int y = 0; y < settings.height; ++y)

@@ -225,16 +225,21 @@ bool same_bits(const KdHit& a, const KdHit& b) {
     return std::memcmp(&a, &b, sizeof(KdHit)) == 0;
 }
 
-/// The device's centre hits with packets on and off against the reference tracer's, bit for bit,
-/// and its image against the reference's.
+/// The device's centre hits with packets on, at 8 and 16 lanes (KDRAY_PACKET_LANES: 4x2 and 4x4
+/// tiles, whichever the device would choose), and off, against the reference tracer's, bit for
+/// bit, and its image against the reference's.
 void check_packets(const Scene& scene, const KdTree& tree, const RenderInputs& base) {
     const FrameResult host = render_reference(tree, scene, base, 1);
     std::vector<Image> images;
-    for (RenderInputs::Packets packets : {RenderInputs::Packets::On, RenderInputs::Packets::Off}) {
-        CAPTURE(packets == RenderInputs::Packets::On);
+    for (unsigned lanes : {8u, 16u, 0u}) {
+        CAPTURE(lanes);
+        const test::ScopedEnv width("KDRAY_PACKET_LANES", lanes ? std::to_string(lanes) : "");
         RenderInputs inputs = base;
-        inputs.packets = packets;
+        inputs.packets = lanes ? RenderInputs::Packets::On : RenderInputs::Packets::Off;
         const FrameResult device = render_opencl(test::opencl_test_device(), tree, scene, inputs);
+        // The width asked for is the one that ran (the override is not silently ignored).
+        CHECK(device.primary_packets == (lanes != 0u));
+        CHECK(device.packet_lanes == lanes);
         REQUIRE(device.hits.hits.size() == host.hits.hits.size());
         int differ = 0;
         for (std::size_t i = 0; i < host.hits.hits.size(); ++i)
@@ -246,11 +251,14 @@ void check_packets(const Scene& scene, const KdTree& tree, const RenderInputs& b
         CHECK(rgb_max_difference(device.image, host.image) < 1e-3);
         images.push_back(device.image);
     }
-    // On the device the two paths run the same shading on the same hits and shadow answers: the
+    // On the device the paths run the same shading on the same hits and shadow answers: the
     // images are the same bit for bit.
-    REQUIRE(images[0].rgb.size() == images[1].rgb.size());
-    CHECK(std::memcmp(images[0].rgb.data(), images[1].rgb.data(),
-                      images[0].rgb.size() * sizeof(float)) == 0);
+    for (std::size_t k = 0; k + 1 < images.size(); ++k) {
+        CAPTURE(k);
+        REQUIRE(images[k].rgb.size() == images.back().rgb.size());
+        CHECK(std::memcmp(images[k].rgb.data(), images.back().rgb.data(),
+                          images[k].rgb.size() * sizeof(float)) == 0);
+    }
 }
 
 /// A unit normal of random direction at every corner of the scene's triangles.
@@ -270,8 +278,8 @@ void add_random_vertex_normals(Scene& scene) {
 }  // namespace
 
 TEST_CASE("opencl render: packets of primary rays give the reference's hits bit for bit") {
-    // 37 x 29 pixels: tiles of 4 x 4 that the image's right and bottom edges cut, whose lanes
-    // outside the image must neither be traced nor written.
+    // 37 x 29 pixels: tiles of 4 x 4 and 4 x 2 that the image's right and bottom edges cut, whose
+    // lanes outside the image must neither be traced nor written.
     for (const test::NamedScene& s : test::hard_scenes()) {
         CAPTURE(s.name);
         const KdTree tree = build_reference(s.scene);

@@ -13,6 +13,7 @@
 #include "cl/runtime/launch.h"
 #include "cl/runtime/program_cache.h"
 #include "core/device/kd_render.h"
+#include "core/error.h"
 
 namespace kdray {
 namespace {
@@ -35,7 +36,7 @@ std::size_t rows_per_launch(const KdView& view, bool packets) {
     return std::max<std::size_t>(1, pixels_per_launch / std::max<kd_u32>(1, view.width));
 }
 
-/// Packet tiles (KDRAY_PACKET_TILE pixels square) per work-group.
+/// Packet tiles (KDRAY_PACKET_TILE_WIDTH x KDRAY_PACKET_TILE_HEIGHT(lanes) pixels) per work-group.
 constexpr std::size_t kPacketGroup = 4;
 
 bool use_packets(const ClDevice& device, kd_u32 intersect, RenderInputs::Packets packets) {
@@ -71,6 +72,7 @@ std::string render_program_defines(const OpenClRenderChoice& choice,
     std::string options = "-DKDRAY_COMPILED_EFFECTS=" + std::to_string(choice.effects) +
                           " -DKDRAY_COMPILED_INTERSECT=" + std::to_string(choice.intersect) +
                           " -DKDRAY_COMPILED_PACKETS=" + (choice.packets ? "1" : "0");
+    if (choice.packets) options += " -DKDRAY_PACKET_LANES=" + std::to_string(choice.packet_lanes);
     // Without it a device with fp64 would take the double path whatever the host decided.
     if (!choice.fp64) options += " -DKDRAY_FORCE_NO_FP64=1";
     if (correctly_rounded_divide_sqrt) options += " -cl-fp32-correctly-rounded-divide-sqrt";
@@ -123,13 +125,13 @@ void launch_pixels(ClDevice& device, cl::Kernel& kernel, Tile tile, const Render
 
 /// A packet kernel's launch over the launch's rows: a work-item per tile and primary ray of its
 /// pixels.
-void enqueue_packet_tiles(ClDevice& device, cl::Kernel& kernel, std::size_t group,
+void enqueue_packet_tiles(ClDevice& device, cl::Kernel& kernel, std::size_t group, kd_u32 lanes,
                           const KdRenderLaunch& launch) {
     // At least one tile: the warm-up's empty view would make a global size of 0, which OpenCL
     // 1.2 rejects (each work-item returns at once past the image).
-    const std::size_t tiles_x =
-        std::max<std::size_t>(1, (launch.view.width + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE);
-    const std::size_t tiles_y = (launch.rows + KDRAY_PACKET_TILE - 1) / KDRAY_PACKET_TILE;
+    const std::size_t tile_w = KDRAY_PACKET_TILE_WIDTH, tile_h = KDRAY_PACKET_TILE_HEIGHT(lanes);
+    const std::size_t tiles_x = std::max<std::size_t>(1, (launch.view.width + tile_w - 1) / tile_w);
+    const std::size_t tiles_y = (launch.rows + tile_h - 1) / tile_h;
     device.launch(kernel,
                   cl::NDRange(round_up(tiles_x, group), tiles_y,
                               kd_primary_rays_per_pixel(&launch.view)),
@@ -137,18 +139,18 @@ void enqueue_packet_tiles(ClDevice& device, cl::Kernel& kernel, std::size_t grou
 }
 
 /// kd_trace_camera_packets over the launch's rows.
-void launch_camera_packets(ClDevice& device, cl::Kernel& kernel, std::size_t group,
+void launch_camera_packets(ClDevice& device, cl::Kernel& kernel, std::size_t group, kd_u32 lanes,
                            const RenderBuffers& b, const KdRenderLaunch& launch) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, launch, b.traced);
-    enqueue_packet_tiles(device, kernel, group, launch);
+    enqueue_packet_tiles(device, kernel, group, lanes, launch);
 }
 
 /// kd_trace_shadow_packets over the launch's rows.
-void launch_shadow_packets(ClDevice& device, cl::Kernel& kernel, std::size_t group,
+void launch_shadow_packets(ClDevice& device, cl::Kernel& kernel, std::size_t group, kd_u32 lanes,
                            const RenderBuffers& b, const KdRenderLaunch& launch) {
     set_kernel_args(kernel, b.nodes, b.leaf_indices, b.triangles, b.scene_data, b.layout, launch,
                     b.traced, b.occluded);
-    enqueue_packet_tiles(device, kernel, group, launch);
+    enqueue_packet_tiles(device, kernel, group, lanes, launch);
 }
 
 /// kd_trace_costs over the launch's rows, in the pixel kernels' tiles.
@@ -179,9 +181,11 @@ void launch_rows(ClDevice& device, OpenClRenderPlan& plan, const RenderBuffers& 
     launch.first_row = kd_u32(rows.first);
     launch.rows = kd_u32(rows.count);
     if (plan.choice.packets)
-        launch_camera_packets(device, plan.packet, plan.packet_group, b, launch);
+        launch_camera_packets(device, plan.packet, plan.packet_group, plan.choice.packet_lanes, b,
+                              launch);
     if (plan.choice.shadow_packets)
-        launch_shadow_packets(device, plan.shadow, plan.packet_group, b, launch);
+        launch_shadow_packets(device, plan.shadow, plan.packet_group, plan.choice.packet_lanes, b,
+                              launch);
     launch_pixels(device, plan.pixel, plan.tile, b, launch);
     if (plan.choice.cost) launch_costs(device, plan.cost, plan.tile, b, launch);
 }
@@ -194,6 +198,21 @@ bool render_uses_fp64(const ClDevice& device) {
     return device.info().fp64 && !forced;
 }
 
+kd_u32 render_packet_lanes(const ClDevice& device) {
+    if (const char* forced = std::getenv("KDRAY_PACKET_LANES"); forced && *forced != '\0') {
+        const std::string lanes = forced;
+        if (lanes == "8" || lanes == "16") return kd_u32(std::stoul(lanes));
+        throw Error("KDRAY_PACKET_LANES is '" + lanes + "': packets have 8 or 16 lanes");
+    }
+    // The native width is the SIMD register's (PoCL: 16 on AVX-512, 8 on AVX2); a device that
+    // cannot answer gets 8, which no CPU with SIMD splits across registers more than once.
+    cl_uint native = 0;
+    if (clGetDeviceInfo(device.device()(), CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT, sizeof(native),
+                        &native, nullptr) != CL_SUCCESS)
+        native = 0;
+    return native >= 16 ? 16u : 8u;
+}
+
 const char* exact_arithmetic_name(bool fp64) {
     return fp64 ? "fp64" : "float-float";
 }
@@ -204,6 +223,7 @@ OpenClRenderChoice choose_opencl_render(const ClDevice& device, const RenderInpu
     choice.effects = inputs.effects.bits();
     choice.intersect = inputs.intersect;
     choice.packets = use_packets(device, inputs.intersect, inputs.packets);
+    choice.packet_lanes = choice.packets ? render_packet_lanes(device) : 0u;
     // The shadow rays from the packets' primary hits are traced as packets too with shadows and
     // no more lights than a bit mask holds.
     choice.shadow_packets = choice.packets && (choice.effects & KDRAY_EFFECT_SHADOWS) != 0u &&
@@ -315,6 +335,7 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
     FrameResult frame;
     frame.primary_packets = packets;
     frame.shadow_packets = shadow_packets;
+    frame.packet_lanes = plan.choice.packet_lanes;
     frame.image.width = frame.hits.width = int(view.width);
     frame.image.height = frame.hits.height = int(view.height);
     frame.image.rgb.resize(pixels * 3);

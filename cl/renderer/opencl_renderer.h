@@ -22,10 +22,13 @@ namespace kdray {
 
 /// Which kernels frames with given inputs run on a device: the render program (effects and
 /// triangle test compiled in), whether packets trace the primary rays (kd_trace_camera_packets)
-/// and their shadow rays (kd_trace_shadow_packets), and the pixel kernel that shades.
+/// and their shadow rays (kd_trace_shadow_packets) and in how many lanes, and the pixel kernel
+/// that shades.
 struct OpenClRenderChoice {
     kd_u32 effects = 0, intersect = KDRAY_INTERSECT_WATERTIGHT;
     bool packets = false, shadow_packets = false;
+    /// Rays per packet, 8 or 16 (render_packet_lanes); 0 without packets.
+    kd_u32 packet_lanes = 0;
     /// The triangle test's exact steps in double (true) or float-float
     /// (core/device/kd_float_float.h).
     bool fp64 = true;
@@ -41,6 +44,11 @@ OpenClRenderChoice choose_opencl_render(const ClDevice& device, const RenderInpu
 /// set KDRAY_FORCE_NO_FP64 (to anything but "" or "0"), which makes them take the float-float
 /// path a device without fp64 takes, for tests.
 bool render_uses_fp64(const ClDevice& device);
+/// Rays per packet on `device`: 16 (a float16, 4x4 pixels) where its native float vector width is
+/// 16 or more (PoCL on AVX-512), else 8 (a float8, 4x2 pixels: AVX2, where a float16 takes two
+/// registers per operation). KDRAY_PACKET_LANES=8 or 16 in the environment overrides it, for tests
+/// and benchmarks; any other value set there is an Error.
+kd_u32 render_packet_lanes(const ClDevice& device);
 /// "fp64" or "float-float", as stats.json and the log name the path.
 const char* exact_arithmetic_name(bool fp64);
 

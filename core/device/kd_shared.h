@@ -167,12 +167,15 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_RENDER_NORMALS 2u
 #define KDRAY_RENDER_TRACED_SHADOWS 4u
 
-/* kd_trace_camera_packets traces the primary rays of tiles of KDRAY_PACKET_TILE x
- * KDRAY_PACKET_TILE pixels, one work-item each, as one packet: the 16 lanes of a float16;
+/* kd_trace_camera_packets traces the primary rays of tiles of KDRAY_PACKET_TILE_WIDTH x
+ * KDRAY_PACKET_TILE_HEIGHT(lanes) pixels, one work-item each, as one packet: the lanes of an
+ * OpenCL vector, 8 (float8, a 4x2 tile) or 16 (float16, 4x4), the device's native float width
+ * (AVX2 or AVX-512), which the host picks per device and passes as -DKDRAY_PACKET_LANES;
  * kd_trace_shadow_packets the shadow rays from their hits, a packet per light, for frames of at
- * most KDRAY_PACKET_SHADOW_LIGHTS lights (a bit each per primary hit). */
-#define KDRAY_PACKET_TILE 4
-#define KDRAY_PACKET_SIZE (KDRAY_PACKET_TILE * KDRAY_PACKET_TILE)
+ * most KDRAY_PACKET_SHADOW_LIGHTS lights (a bit each per primary hit). Lane i is pixel
+ * (i % KDRAY_PACKET_TILE_WIDTH, i / KDRAY_PACKET_TILE_WIDTH) of its tile. */
+#define KDRAY_PACKET_TILE_WIDTH 4
+#define KDRAY_PACKET_TILE_HEIGHT(lanes) ((lanes) / KDRAY_PACKET_TILE_WIDTH)
 #define KDRAY_PACKET_SHADOW_LIGHTS 32u
 
 /* KdMaterial flags. */

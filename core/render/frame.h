@@ -32,6 +32,8 @@ struct FrameResult {
     /// what ran, which `--packets auto` decides by device and triangle test (the reference
     /// tracer never does).
     bool primary_packets = false, shadow_packets = false;
+    /// Rays per packet where packets traced (8 or 16: the device's float width), else 0.
+    unsigned packet_lanes = 0;
 };
 
 }  // namespace kdray

@@ -3,8 +3,9 @@
  * scene's kernel holds no secondary-ray code at all, and per triangle test
  * (-DKDRAY_COMPILED_INTERSECT, watertight unless it says Moller-Trumbore).
  *
- *   kd_trace_camera_packets  (CPU devices) the primary rays of 4x4 pixel tiles as packets of 16
- *                            (packet_traverse.cl), their hits into a buffer
+ *   kd_trace_camera_packets  (CPU devices) the primary rays of 4x4 or 4x2 pixel tiles as
+ *                            packets of 16 or 8 (packet_traverse.cl, -DKDRAY_PACKET_LANES), their
+ *                            hits into a buffer
  *   kd_trace_shadow_packets  (CPU devices, frames with lights) the shadow rays from those hits,
  *                            a packet per tile and light, a bit per blocked ray into a buffer
  *   kd_render_pixels         one work-item per pixel: its samples, shaded; the primary hits come
@@ -57,35 +58,35 @@ KDRAY_INLINE void kd_scene_view(__global const KdNode* nodes, __global const kd_
 
 #if KDRAY_COMPILED_PACKETS
 /* kd_hash and kd_unit_float of core/device/kd_render.h, per lane. */
-KDRAY_INLINE uint16 kd_hash16(uint16 x) {
+KDRAY_INLINE kd_packet_uint kd_packet_hash(kd_packet_uint x) {
     KDRAY_LOWBIAS32(x);
     return x;
 }
-KDRAY_INLINE float16 kd_unit_float16(uint16 h) {
-    return KDRAY_UNIT_FLOAT(convert_float16, h);
+KDRAY_INLINE kd_packet_float kd_packet_unit_float(kd_packet_uint h) {
+    return KDRAY_UNIT_FLOAT(kd_packet_convert_float, h);
 }
 
 /* Primary ray r of pixels (x, y), one per lane: kd_primary_ray and kd_camera_ray of core/
  * kd_render.h through the same macros, so that each lane's ray is the scalar one bit for bit. */
-KDRAY_INLINE KdPacketRays kd_primary_packet(const KdView* view, uint16 x, uint16 y, kd_u32 r,
-                                            int16 valid) {
-    float16 px = convert_float16(x) + 0.5f, py = convert_float16(y) + 0.5f;
+KDRAY_INLINE KdPacketRays kd_primary_packet(const KdView* view, kd_packet_uint x, kd_packet_uint y,
+                                            kd_u32 r, kd_packet_int valid) {
+    kd_packet_float px = kd_packet_convert_float(x) + 0.5f, py = kd_packet_convert_float(y) + 0.5f;
     if (view->spp > 1u && r != view->spp) {
-        const uint16 h = kd_hash16(KDRAY_SAMPLE_KEY(view, x, y, r));
-        px = convert_float16(x) + kd_unit_float16(h);
-        py = convert_float16(y) + kd_unit_float16(kd_hash16(h));
+        const kd_packet_uint h = kd_packet_hash(KDRAY_SAMPLE_KEY(view, x, y, r));
+        px = kd_packet_convert_float(x) + kd_packet_unit_float(h);
+        py = kd_packet_convert_float(y) + kd_packet_unit_float(kd_packet_hash(h));
     }
-    const float16 sx = KDRAY_SCREEN_X(view, px);
-    const float16 sy = KDRAY_SCREEN_Y(view, py);
+    const kd_packet_float sx = KDRAY_SCREEN_X(view, px);
+    const kd_packet_float sy = KDRAY_SCREEN_Y(view, py);
     KdPacketRays rays;
     for (int a = 0; a < 3; ++a) {
-        rays.org[a] = (float16)(view->origin[a]);
+        rays.org[a] = (kd_packet_float)(view->origin[a]);
         rays.dir[a] = KDRAY_CAMERA_DIR(view, a, sx, sy);
     }
-    const float16 inv = KDRAY_INV_LENGTH3(rays.dir[0], rays.dir[1], rays.dir[2]);
+    const kd_packet_float inv = KDRAY_INV_LENGTH3(rays.dir[0], rays.dir[1], rays.dir[2]);
     for (int a = 0; a < 3; ++a) rays.dir[a] = rays.dir[a] * inv;
-    rays.tmin = (float16)(0.0f);
-    rays.tmax = (float16)(KDRAY_INF);
+    rays.tmin = (kd_packet_float)(0.0f);
+    rays.tmax = (kd_packet_float)(KDRAY_INF);
     rays.valid = valid;
     return rays;
 }
@@ -97,8 +98,8 @@ __kernel void kd_trace_camera_packets(__global const KdNode* nodes,
                                       __global const kd_u32* leaf_indices,
                                       __global const float* triangles, const KdRenderLaunch launch,
                                       __global KdHit* hits) {
-    const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE;
-    const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE;
+    const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE_WIDTH;
+    const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE_ROWS;
     const kd_u32 r = (kd_u32)get_global_id(2);
     const kd_u32 rows = launch.rows;
     if (x0 >= launch.view.width || row0 >= rows || r >= kd_primary_rays_per_pixel(&launch.view))
@@ -106,17 +107,18 @@ __kernel void kd_trace_camera_packets(__global const KdNode* nodes,
     const KdView v = launch.view;
     float box[6];
     for (int i = 0; i < 6; ++i) box[i] = launch.bounds[i];
-    /* Lane i: pixel (x0 + i % 4, row0 + i / 4) of the tile. */
-    const uint16 lane = (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-    const uint16 x = x0 + lane % KDRAY_PACKET_TILE, row = row0 + lane / KDRAY_PACKET_TILE;
-    const int16 valid = (x < v.width) & (row < rows);
+    /* Lane i: pixel (x0 + i % KDRAY_PACKET_TILE_WIDTH, row0 + i / KDRAY_PACKET_TILE_WIDTH). */
+    const kd_packet_uint lane = KDRAY_PACKET_LANE_INDEX;
+    const kd_packet_uint x = x0 + lane % KDRAY_PACKET_TILE_WIDTH,
+                         row = row0 + lane / KDRAY_PACKET_TILE_WIDTH;
+    const kd_packet_int valid = (x < v.width) & (row < rows);
     const KdPacketRays rays = kd_primary_packet(&v, x, launch.first_row + row, r, valid);
-    KdHit out[KDRAY_PACKET_SIZE];
+    KdHit out[KDRAY_PACKET_LANES];
     kd_trace_packet(nodes, leaf_indices, triangles, box, &rays, 0, out);
     __global KdHit* plane = hits + (size_t)r * rows * v.width;
-    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
-        const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE);
-        const kd_u32 ri = row0 + (kd_u32)(i / KDRAY_PACKET_TILE);
+    for (int i = 0; i < KDRAY_PACKET_LANES; ++i) {
+        const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE_WIDTH);
+        const kd_u32 ri = row0 + (kd_u32)(i / KDRAY_PACKET_TILE_WIDTH);
         if (xi < v.width && ri < rows) plane[(size_t)ri * v.width + xi] = out[i];
     }
 }
@@ -135,8 +137,8 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
                                       __global const uchar* scene_data, const KdSceneLayout layout,
                                       const KdRenderLaunch launch, __global const KdHit* traced,
                                       __global kd_u32* occluded) {
-    const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE;
-    const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE;
+    const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE_WIDTH;
+    const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE_ROWS;
     const kd_u32 r = (kd_u32)get_global_id(2);
     const kd_u32 first_row = launch.first_row, rows = launch.rows;
     if (x0 >= launch.view.width || row0 >= rows || r >= kd_primary_rays_per_pixel(&launch.view))
@@ -146,15 +148,15 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
     const KdView v = launch.view;
     KdSceneView scene;
     kd_scene_view(nodes, leaf_indices, triangles, scene_data, &layout, &launch, &scene);
-    /* Per lane (pixel (x0 + i % 4, row0 + i / 4)): its hit's point and geometric and shading
-     * normals, as kd_trace_sample computes them. */
-    kd_f32 p[KDRAY_PACKET_SIZE][3], ng[KDRAY_PACKET_SIZE][3], ns[KDRAY_PACKET_SIZE][3];
-    int inside[KDRAY_PACKET_SIZE], has_hit[KDRAY_PACKET_SIZE];
-    kd_u32 blocked[KDRAY_PACKET_SIZE];
-    size_t at[KDRAY_PACKET_SIZE];
-    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
-        const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE);
-        const kd_u32 ri = row0 + (kd_u32)(i / KDRAY_PACKET_TILE);
+    /* Per lane (pixel (x0 + i % KDRAY_PACKET_TILE_WIDTH, row0 + i / KDRAY_PACKET_TILE_WIDTH)): its
+     * hit's point and geometric and shading normals, as kd_trace_sample computes them. */
+    kd_f32 p[KDRAY_PACKET_LANES][3], ng[KDRAY_PACKET_LANES][3], ns[KDRAY_PACKET_LANES][3];
+    int inside[KDRAY_PACKET_LANES], has_hit[KDRAY_PACKET_LANES];
+    kd_u32 blocked[KDRAY_PACKET_LANES];
+    size_t at[KDRAY_PACKET_LANES];
+    for (int i = 0; i < KDRAY_PACKET_LANES; ++i) {
+        const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE_WIDTH);
+        const kd_u32 ri = row0 + (kd_u32)(i / KDRAY_PACKET_TILE_WIDTH);
         blocked[i] = 0u;
         has_hit[i] = 0;
         at[i] = (size_t)r * rows * v.width + (size_t)ri * v.width + xi;
@@ -174,10 +176,10 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
     for (int i = 0; i < 6; ++i) box[i] = launch.bounds[i];
     const kd_u32 light_count = kd_shining_lights(&v);
     for (kd_u32 light = 0; light < light_count; ++light) {
-        float org[3][KDRAY_PACKET_SIZE], dir[3][KDRAY_PACKET_SIZE], tmax[KDRAY_PACKET_SIZE];
-        int valid[KDRAY_PACKET_SIZE];
+        float org[3][KDRAY_PACKET_LANES], dir[3][KDRAY_PACKET_LANES], tmax[KDRAY_PACKET_LANES];
+        int valid[KDRAY_PACKET_LANES];
         int any_ray = 0;
-        for (int i = 0; i < KDRAY_PACKET_SIZE; ++i) {
+        for (int i = 0; i < KDRAY_PACKET_LANES; ++i) {
             valid[i] = 0;
             tmax[i] = 0.0f;
             for (int a = 0; a < 3; ++a) org[a][i] = dir[a][i] = 1.0f;
@@ -198,18 +200,18 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
         if (!any_ray) continue;
         KdPacketRays rays;
         for (int a = 0; a < 3; ++a) {
-            rays.org[a] = vload16(0, org[a]);
-            rays.dir[a] = vload16(0, dir[a]);
+            rays.org[a] = kd_packet_vload(0, org[a]);
+            rays.dir[a] = kd_packet_vload(0, dir[a]);
         }
-        rays.tmin = (float16)(0.0f);
-        rays.tmax = vload16(0, tmax);
-        rays.valid = vload16(0, valid);
-        KdHit out[KDRAY_PACKET_SIZE];
+        rays.tmin = (kd_packet_float)(0.0f);
+        rays.tmax = kd_packet_vload(0, tmax);
+        rays.valid = kd_packet_vload(0, valid);
+        KdHit out[KDRAY_PACKET_LANES];
         kd_trace_packet(nodes, leaf_indices, triangles, box, &rays, 1, out);
-        for (int i = 0; i < KDRAY_PACKET_SIZE; ++i)
+        for (int i = 0; i < KDRAY_PACKET_LANES; ++i)
             if (valid[i] && out[i].prim != KDRAY_NO_HIT) blocked[i] |= 1u << light;
     }
-    for (int i = 0; i < KDRAY_PACKET_SIZE; ++i)
+    for (int i = 0; i < KDRAY_PACKET_LANES; ++i)
         if (inside[i]) occluded[at[i]] = blocked[i];
 }
 #endif
