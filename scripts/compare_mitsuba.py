@@ -135,13 +135,13 @@ def main():
                         help="path segments, as Mitsuba counts them (conventions.md)")
     parser.add_argument("--spp", type=int, default=256)
     parser.add_argument("--size", type=int, default=256, help="square image side")
-    parser.add_argument("--quick", action="store_true", help="128x128 at 64 spp (the test)")
+    parser.add_argument("--quick", action="store_true", help="128x128 at 256 spp (the test)")
     parser.add_argument("--bound", type=float, default=0.02,
                         help="largest relative MSE that passes")
     parser.add_argument("--out", help="write OUT.json and OUT.md")
     args = parser.parse_args()
     if args.quick:
-        args.spp, args.size = 64, 128
+        args.spp, args.size = 256, 128
     if not os.path.isdir(os.path.join(SHARED, "scenes", "cornell-box")):
         print(f"compare_mitsuba: skipped: {SHARED}/scenes/cornell-box is absent")
         return SKIP
