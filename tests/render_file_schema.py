@@ -67,6 +67,12 @@ GOOD = [
         "position": [0.0, 0, 3e0], "up": [0, 2, 0]}}),
     ("float range", {"background": [3.4e38, 0, 0], "lights": [{"position": [-3.4e38, 0, 0]}]}),
     ("directional light, default direction", {"lights": [{"type": "directional"}]}),
+    ("integrator whitted", {"integrator": "whitted", "max_depth": 16}),
+    ("integrator null, Whitted's depth", {"integrator": None, "max_depth": 3}),
+    ("integrator path, default depth", {"integrator": "path"}),
+    ("integrator path, unbounded", {"integrator": "path", "max_depth": -1}),
+    ("integrator path, deep", {"integrator": "path", "max_depth": 65536}),
+    ("integrator path, emitters only", {"integrator": "path", "max_depth": 1}),
 ]
 
 # (name, render file as JSON text): both kdray and the schema refuse these.
@@ -131,6 +137,13 @@ BAD_OBJECTS = [
     ("max_depth 0", {"max_depth": 0}),
     ("max_depth too large", {"max_depth": 17}),
     ("max_depth real", {"max_depth": 2.5}),
+    ("integrator unknown", {"integrator": "bdpt"}),
+    ("integrator a number", {"integrator": 1}),
+    ("max_depth -1 with Whitted", {"max_depth": -1}),
+    ("max_depth 17 with Whitted", {"integrator": "whitted", "max_depth": 17}),
+    ("path max_depth 0", {"integrator": "path", "max_depth": 0}),
+    ("path max_depth -2", {"integrator": "path", "max_depth": -2}),
+    ("path max_depth too large", {"integrator": "path", "max_depth": 65537}),
     ("$schema not a string", {"$schema": 1}),
 ]
 BAD_TEXTS = [

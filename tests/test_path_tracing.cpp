@@ -1,0 +1,276 @@
+// test_path_tracing.cpp — the path integrator ("integrator": "path", core/device/kd_path.h)
+// against closed forms: a furnace (a closed emitting Lambertian sphere around the camera), whose
+// radiance is known at every depth, and Whitted's direct light where the two must agree; then the
+// OpenCL kernel against the reference renderer on a box with every kind of material and light.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cl/renderer/opencl_renderer.h"
+#include "core/render/reference_tracer.h"
+#include "core/render/render_file.h"
+#include "core/render/render_setup.h"
+#include "core/scene/scene.h"
+#include "core/tree/reference_builder.h"
+#include "tests/support.h"
+#include "tests/test_opencl_fixture.h"
+
+using namespace kdray;
+
+namespace {
+
+// The furnace's material: albedo a and emitted radiance Le per channel, so that each channel has
+// its own closed form.
+constexpr float kAlbedo[3] = {0.5f, 0.7f, 0.3f};
+constexpr float kEmitted[3] = {1.0f, 0.5f, 0.25f};
+
+/// OBJ text of a closed UV sphere of radius 1 about the origin, `rings` x 2 `rings` faces, every
+/// triangle wound to face the centre (conventions.md: Ke shines from the front side only), with
+/// material `wall` of `mtl`.
+std::string inward_sphere_obj(int rings, const std::string& mtl) {
+    std::ostringstream obj;
+    obj.precision(9);
+    obj << "mtllib " << mtl << "\nusemtl wall\n";
+    const int segments = 2 * rings;
+    std::vector<Vec3> v;
+    v.push_back({0, 1, 0});
+    for (int i = 1; i < rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            const double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
+            v.push_back({float(std::sin(theta) * std::cos(phi)), float(std::cos(theta)),
+                         float(std::sin(theta) * std::sin(phi))});
+        }
+    v.push_back({0, -1, 0});
+    for (const Vec3& p : v) obj << "v " << p.x << " " << p.y << " " << p.z << "\n";
+    const int south = int(v.size());  // 1-based index of the last vertex
+    auto ring = [&](int i, int j) { return 2 + (i - 1) * segments + (j % segments); };
+    auto face = [&](int a, int b, int c) {
+        // Inward: the winding normal points toward the origin, against the face's centroid.
+        const Vec3 pa = v[a - 1], pb = v[b - 1], pc = v[c - 1];
+        const Vec3 n = cross(pb - pa, pc - pa);
+        if (dot(n, pa + pb + pc) > 0) std::swap(b, c);
+        obj << "f " << a << " " << b << " " << c << "\n";
+    };
+    for (int j = 0; j < segments; ++j) {
+        face(1, ring(1, j), ring(1, j + 1));
+        face(south, ring(rings - 1, j), ring(rings - 1, j + 1));
+        for (int i = 1; i + 1 < rings; ++i) {
+            face(ring(i, j), ring(i + 1, j), ring(i + 1, j + 1));
+            face(ring(i, j), ring(i + 1, j + 1), ring(i, j + 1));
+        }
+    }
+    return obj.str();
+}
+
+/// The furnace scene, written and loaded: the sphere above in Lambertian kAlbedo emitting
+/// kEmitted from its inside.
+Scene furnace_scene() {
+    const auto dir = test::fresh_temp_dir("path_furnace");
+    std::ostringstream mtl;
+    mtl << "newmtl wall\nKd " << kAlbedo[0] << " " << kAlbedo[1] << " " << kAlbedo[2] << "\nKe "
+        << kEmitted[0] << " " << kEmitted[1] << " " << kEmitted[2] << "\nKs 0 0 0\nillum 1\n";
+    test::write_text_file(dir / "furnace.mtl", mtl.str());
+    return load_obj(
+        test::write_text_file(dir / "furnace.obj", inward_sphere_obj(12, "furnace.mtl")));
+}
+
+/// The camera inside the sphere, off its centre, looking along a skew direction with a wide
+/// view: every pixel sees the wall at a different distance and angle.
+RenderSettings furnace_settings(int size, int spp, int max_depth) {
+    RenderSettings s;
+    s.width = s.height = size;
+    s.spp = spp;
+    s.integrator = Integrator::path;
+    s.max_depth = max_depth;
+    s.background = {0, 0, 0};  // a path that leaked out of the sphere would bring nothing
+    s.camera_keys = {CameraKey{
+        0, SceneCamera(Camera{{0.2f, -0.1f, 0.3f}, {1, 0.4f, -0.7f}, {0, 1, 0}, 100.0f})}};
+    s.camera_given = true;
+    return s;
+}
+
+/// Le (1 + a + ... + a^(segments - 1)): the furnace's radiance when paths have at most
+/// `segments` segments (Le / (1 - a) for -1, unbounded).
+double furnace_radiance(int c, int segments) {
+    if (segments < 0) return kEmitted[c] / (1.0 - kAlbedo[c]);
+    double sum = 0, term = kEmitted[c];
+    for (int i = 0; i < segments; ++i, term *= kAlbedo[c]) sum += term;
+    return sum;
+}
+
+/// Per channel: the image's mean and the standard deviation of its pixels about the mean.
+struct ChannelStats {
+    double mean = 0, pixel_sd = 0, worst = 0;  // worst: the largest |pixel - expected|
+};
+
+ChannelStats channel_stats(const Image& image, int c, double expected) {
+    const std::size_t pixels = image.rgb.size() / 3;
+    ChannelStats s;
+    for (std::size_t i = 0; i < pixels; ++i) s.mean += image.rgb[3 * i + c];
+    s.mean /= double(pixels);
+    for (std::size_t i = 0; i < pixels; ++i) {
+        const double d = image.rgb[3 * i + c] - s.mean;
+        s.pixel_sd += d * d;
+        s.worst = std::max(s.worst, std::fabs(image.rgb[3 * i + c] - expected));
+    }
+    s.pixel_sd = std::sqrt(s.pixel_sd / double(pixels - 1));
+    return s;
+}
+
+/// The furnace's image against its closed form at `max_depth`, channel by channel. Pixels are
+/// independent estimates (each has its own random numbers), so the pixels' spread estimates one
+/// pixel's Monte Carlo error: the image's mean must lie within 4 standard errors of the closed
+/// form (pixel_sd / sqrt(pixels): 6e-5 of the cases by chance), and no pixel farther than 6
+/// pixel standard deviations from it (a lost or doubled contribution in one pixel). The spread
+/// itself is bounded by `max_relative_sd` of the radiance, so that a noisy estimator cannot pass
+/// by its wide error bars.
+void check_furnace(const Image& image, int max_depth, double max_relative_sd) {
+    const double pixels = double(image.rgb.size() / 3);
+    for (int c = 0; c < 3; ++c) {
+        CAPTURE(c);
+        const double expected = furnace_radiance(c, max_depth);
+        const ChannelStats s = channel_stats(image, c, expected);
+        CAPTURE(expected);
+        CAPTURE(s.mean);
+        CAPTURE(s.pixel_sd);
+        CAPTURE(s.worst);
+        CHECK(std::fabs(s.mean - expected) <= 4 * s.pixel_sd / std::sqrt(pixels) + 1e-6 * expected);
+        CHECK(s.worst <= 6 * s.pixel_sd + 1e-6 * expected);
+        CHECK(s.pixel_sd <= max_relative_sd * expected);
+    }
+}
+
+RenderInputs furnace_inputs(const Scene& scene, const RenderSettings& settings) {
+    RenderInputs inputs = prepare_render(scene, settings, settings.camera_at(0, scene.frame), 7);
+    REQUIRE(inputs.effects.path);
+    REQUIRE(inputs.effects.area_lights);
+    return inputs;
+}
+
+}  // namespace
+
+TEST_CASE("path: a closed emitting Lambertian sphere has radiance Le / (1 - a) everywhere") {
+    const Scene scene = furnace_scene();
+    const KdTree tree = build_reference(scene);
+    // Unbounded paths, ended by Russian roulette: 32x32 pixels of 64 samples.
+    const RenderSettings settings = furnace_settings(32, 64, -1);
+    const FrameResult host = render_reference(tree, scene, furnace_inputs(scene, settings), 2);
+    check_furnace(host.image, -1, 0.1);
+}
+
+TEST_CASE("path: the furnace at each max_depth is Le (1 + a + ... + a^(max_depth - 1))") {
+    const Scene scene = furnace_scene();
+    const KdTree tree = build_reference(scene);
+    // One segment: the wall's own emission, nothing random, so every pixel is Le in float.
+    SUBCASE("max_depth 1") {
+        const RenderSettings settings = furnace_settings(16, 4, 1);
+        const FrameResult host = render_reference(tree, scene, furnace_inputs(scene, settings), 2);
+        for (std::size_t i = 0; i < host.image.rgb.size(); ++i)
+            CHECK(host.image.rgb[i] == doctest::Approx(kEmitted[i % 3]).epsilon(1e-6));
+    }
+    for (int depth : {2, 3, 5}) {
+        CAPTURE(depth);
+        const RenderSettings settings = furnace_settings(24, 32, depth);
+        const FrameResult host = render_reference(tree, scene, furnace_inputs(scene, settings), 2);
+        check_furnace(host.image, depth, 0.1);
+    }
+}
+
+TEST_CASE("path: the OpenCL kernel's furnace has radiance Le / (1 - a) everywhere") {
+    const Scene scene = furnace_scene();
+    const KdTree tree = build_reference(scene);
+    const RenderSettings settings = furnace_settings(32, 32, -1);
+    const FrameResult device =
+        render_opencl(test::opencl_test_device(), tree, scene, furnace_inputs(scene, settings));
+    check_furnace(device.image, -1, 0.15);
+}
+
+TEST_CASE("path: at max_depth 2 a scene under point lights is Whitted's direct light") {
+    // Two segments are the camera ray and a light sample: with only delta lights (nothing emits)
+    // the path integrator's estimate is deterministic, and it is Whitted's first generation:
+    // Lambert and the Blinn-Phong highlight under each light, behind shadow rays.
+    const auto dir = test::fresh_temp_dir("path_direct");
+    test::write_text_file(dir / "m.mtl",
+                          "newmtl matte\nKd 0.6 0.5 0.4\nillum 1\n"
+                          "newmtl shiny\nKd 0.2 0.3 0.4\nKs 0.5 0.5 0.5\nNs 40\nillum 2\n");
+    test::write_text_file(dir / "scene.obj",
+                          "mtllib m.mtl\nv -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\n"
+                          "v -0.5 0.2 0\nv 0.5 0.2 0\nv 0 1 0.3\n"
+                          "usemtl matte\nf 1 3 2\nf 1 4 3\nusemtl shiny\nf 5 6 7\n");
+    const Scene scene = load_obj(dir / "scene.obj");
+    const KdTree tree = build_reference(scene);
+    RenderSettings whitted;
+    whitted.width = 48;
+    whitted.height = 36;
+    whitted.spp = 2;
+    whitted.max_depth = 1;
+    // The path's background lights the scene as a sky would (docs/path-tracing.md): black here,
+    // where Whitted's first generation sees no sky.
+    whitted.background = {0, 0, 0};
+    whitted.lights = {Light{Light::Type::point, {1, 2, 1}, {}, {5, 5, 5}},
+                      Light{Light::Type::directional, {}, {-1, -2, -0.5}, {0.5, 0.4, 0.3}}};
+    whitted.camera_keys = {
+        CameraKey{0, SceneCamera(Camera{{0.5f, 2.0f, 3.0f}, {0, 0.2f, 0}, {0, 1, 0}, 50.0f})}};
+    whitted.camera_given = true;
+    RenderSettings path = whitted;
+    path.integrator = Integrator::path;
+    path.max_depth = 2;
+    const Camera camera = whitted.camera_at(0, scene.frame);
+    const FrameResult a =
+        render_reference(tree, scene, prepare_render(scene, whitted, camera, 3), 2);
+    const FrameResult b = render_reference(tree, scene, prepare_render(scene, path, camera, 3), 2);
+    double largest = 0;
+    for (std::size_t i = 0; i < a.image.rgb.size(); ++i) {
+        CAPTURE(i);
+        largest = std::max(largest, double(a.image.rgb[i]));
+        // The same terms summed in another order: a few float roundings apart.
+        CHECK(b.image.rgb[i] == doctest::Approx(a.image.rgb[i]).epsilon(1e-5).scale(1e-6));
+    }
+    CHECK(largest > 0.1);  // the lights do reach what the camera sees
+    CHECK(b.rays.shadow == a.rays.shadow);
+    CHECK(b.rays.primary == a.rays.primary);
+}
+
+TEST_CASE("path: the OpenCL kernel's image is the reference renderer's") {
+    // The bundled glass room: a mirror, a glass block, an emitter and a point light, so every
+    // lobe and both light samplers run. The same random numbers follow the same paths on both
+    // sides; a hit that differs in its last bit can send one path elsewhere (a GPU's arithmetic
+    // may), so the images are compared by the share of pixels that agree closely and by their
+    // mean, not pixel for pixel.
+    const Scene scene = load_obj(test::source_dir() / "testdata/cornell/room.obj");
+    RenderSettings settings = load_render_file(test::source_dir() / "testdata/cornell/render.json");
+    settings.width = 64;
+    settings.height = 48;
+    settings.spp = 4;
+    settings.integrator = Integrator::path;
+    settings.max_depth = -1;
+    const KdTree tree = build_reference(scene);
+    const RenderInputs inputs =
+        prepare_render(scene, settings, settings.camera_at(0, scene.frame), 11);
+    REQUIRE(inputs.effects.path);
+    REQUIRE(inputs.effects.refraction);
+    REQUIRE(inputs.effects.area_lights);
+    const FrameResult device = render_opencl(test::opencl_test_device(), tree, scene, inputs);
+    const FrameResult host = render_reference(tree, scene, inputs, 2);
+    const std::size_t pixels = host.image.rgb.size() / 3;
+    std::size_t close = 0;
+    double mean_host = 0, mean_device = 0;
+    for (std::size_t i = 0; i < pixels; ++i) {
+        bool same = true;
+        for (int c = 0; c < 3; ++c) {
+            const double h = host.image.rgb[3 * i + c], d = device.image.rgb[3 * i + c];
+            mean_host += h;
+            mean_device += d;
+            same = same && std::fabs(h - d) <= 1e-4 * std::max(1.0, std::fabs(h));
+        }
+        close += same;
+    }
+    CHECK(host.rays.reflection > 0);
+    CHECK(host.rays.refraction > 0);
+    CHECK(host.rays.area_shadow > 0);
+    CHECK(double(close) >= 0.98 * double(pixels));
+    CHECK(mean_device == doctest::Approx(mean_host).epsilon(0.01));
+}
