@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """docs/render-file.schema.json against kdray's own render-file reader (core/render/render_file.cpp).
 
-1. Every render file of testdata/ and of ../shared/scenes (that part skipped, saying so, when
+1. Every render file of testdata/, scripts/render-files/ and of ../shared/scenes (that part skipped, saying so, when
    ../shared is absent) is valid under the schema.
 2. Good and bad render files made here are run through `kdray render` (a one-triangle scene, the
    reference builder and tracer, 8x8 pixels) and through the schema: a good file renders (exit 0)
@@ -210,6 +210,8 @@ def main():
     files = sorted((ROOT / "testdata").rglob("render*.json"))
     if not files:
         failures.append("no render file under testdata/")
+    # The render files kept for the shared scenes (scripts/render-files/README.md).
+    files += sorted((ROOT / "scripts" / "render-files").glob("*.json"))
     scenes = pathlib.Path(args.shared) / "scenes"
     if scenes.is_dir():
         shared = sorted(scenes.rglob("render*.json"))
