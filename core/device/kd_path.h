@@ -404,12 +404,14 @@ KDRAY_HOT_INLINE void kd_trace_path_sample(const KdSceneView* scene, const KdVie
     }
 }
 
-/* The random numbers of sample s of pixel (x, y): a key of its own beside the jitter's. */
-KDRAY_INLINE KdPathRandom kd_path_random(const KdView* view, kd_u32 x, kd_u32 y, kd_u32 s) {
-    KdPathRandom r;
-    r.key = kd_hash(KDRAY_SAMPLE_KEY(view, x, y, s) ^ 0x68E31DA4u);
-    r.dimension = 0u;
-    return r;
+/* The random numbers of sample s of pixel (x, y): a key of its own beside the jitter's. (Set
+ * through a pointer: a struct returned by value is an sret argument, which LLVM marks noalias and
+ * then, inlined, declares with llvm.experimental.noalias.scope.decl, an intrinsic that Oclgrind
+ * 21.10 cannot run.) */
+KDRAY_INLINE void kd_path_random(const KdView* view, kd_u32 x, kd_u32 y, kd_u32 s,
+                                 KdPathRandom* r) {
+    r->key = kd_hash(KDRAY_SAMPLE_KEY(view, x, y, s) ^ 0x68E31DA4u);
+    r->dimension = 0u;
 }
 
 #endif /* KDRAY_KD_PATH_H */

@@ -308,7 +308,8 @@ KDRAY_HOT_INLINE void kd_render_pixel(const KdSceneView* scene, const KdView* vi
         kd_primary_ray(view, x, y, s, &primary);
 #if KDRAY_PATH_COMPILED
         if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_PATH)) {
-            KdPathRandom random = kd_path_random(view, x, y, s);
+            KdPathRandom random;
+            kd_path_random(view, x, y, s, &random);
             kd_trace_path_sample(scene, view, &primary, traced ? &hit : 0, &random, rgb, &out.rays,
                                  view->spp == 1u ? &out.centre_hit : 0, out.normal);
         } else
