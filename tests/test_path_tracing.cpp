@@ -5,6 +5,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "tests/test_opencl_fixture.h"
 
 using namespace kdray;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -273,4 +275,51 @@ TEST_CASE("path: the OpenCL kernel's image is the reference renderer's") {
     CHECK(host.rays.area_shadow > 0);
     CHECK(double(close) >= 0.98 * double(pixels));
     CHECK(mean_device == doctest::Approx(mean_host).epsilon(0.01));
+}
+
+TEST_CASE("kdray render: the path integrator in stats.json, --ray-depth in its range") {
+    const auto dir = test::fresh_temp_dir("path_cli");
+    const auto obj = test::write_text_file(
+        dir / "tri.obj", "mtllib m.mtl\nusemtl lamp\nv -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n");
+    test::write_text_file(dir / "m.mtl", "newmtl lamp\nKd 0.5 0.5 0.5\nKe 2 2 2\n");
+    const auto path_file = test::write_text_file(
+        dir / "path.json",
+        R"({"camera": {"position": [0, 0, 3]}, "integrator": "path", "image": {"spp": 2}})");
+    const auto whitted_file =
+        test::write_text_file(dir / "whitted.json", R"({"camera": {"position": [0, 0, 3]}})");
+    auto render = [&](const fs::path& file, std::vector<std::string> extra) {
+        std::vector<std::string> args = {
+            "render", obj.string(), "-o", (dir / "out").string(), "--camera", file.string(),
+            "--size", "8x8",        "-q"};
+        args.insert(args.end(), extra.begin(), extra.end());
+        return test::run_kdray(args, 120);
+    };
+    for (const char* tracer : {"reference", "opencl"}) {
+        CAPTURE(tracer);
+        const test::CommandResult r = render(path_file, {"--tracer", tracer});
+        INFO("stderr: " << r.err);
+        REQUIRE(r.status == 0);
+        const nlohmann::json stats = test::read_json(dir / "out" / "stats.json");
+        CHECK(stats["integrator"] == "path");
+        CHECK(stats["max_depth"] == -1);
+        const nlohmann::json& effects = stats["frames"][0]["effects"];
+        CHECK(effects["path"] == true);
+        CHECK(effects["reasons"]["path"] == "the render file asks for \"integrator\": \"path\"");
+        CHECK(effects["ambient"] == false);
+        fs::remove_all(dir / "out");
+    }
+    // -1 and depths past Whitted's 16 are the path's alone.
+    const test::CommandResult deep = render(path_file, {"--ray-depth", "40"});
+    CHECK(deep.status == 0);
+    CHECK(test::read_json(dir / "out" / "stats.json")["max_depth"] == 40);
+    test::check_error(render(whitted_file, {"--ray-depth", "-1"}), 2, {"--ray-depth", "16"});
+    test::check_error(render(path_file, {"--ray-depth", "0"}), 2, {"--ray-depth", "-1"});
+    const nlohmann::json whitted = [&] {
+        fs::remove_all(dir / "out");
+        REQUIRE(render(whitted_file, {}).status == 0);
+        return test::read_json(dir / "out" / "stats.json");
+    }();
+    CHECK(whitted["integrator"] == "whitted");
+    CHECK(whitted["frames"][0]["effects"]["path"] == false);
+    fs::remove_all(dir);
 }
