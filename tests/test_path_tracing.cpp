@@ -4,6 +4,7 @@
 // OpenCL kernel against the reference renderer on a box with every kind of material and light.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -29,13 +30,12 @@ namespace {
 constexpr float kAlbedo[3] = {0.5f, 0.7f, 0.3f};
 constexpr float kEmitted[3] = {1.0f, 0.5f, 0.25f};
 
-/// OBJ text of a closed UV sphere of radius 1 about the origin, `rings` x 2 `rings` faces, every
-/// triangle wound to face the centre (conventions.md: Ke shines from the front side only), with
-/// material `wall` of `mtl`.
-std::string inward_sphere_obj(int rings, const std::string& mtl) {
-    std::ostringstream obj;
-    obj.precision(9);
-    obj << "mtllib " << mtl << "\nusemtl wall\n";
+/// Appends to `obj` a closed UV sphere of `radius` about `centre`, `rings` x 2 `rings` faces, in
+/// material `material`, every triangle wound to face the centre (`inward`) or away from it;
+/// `first` is the 1-based index of its first vertex, and returns the next sphere's.
+int add_sphere(std::ostringstream& obj, int first, Vec3 centre, float radius, int rings,
+               bool inward, const std::string& material) {
+    obj << "usemtl " << material << "\n";
     const int segments = 2 * rings;
     std::vector<Vec3> v;
     v.push_back({0, 1, 0});
@@ -46,37 +46,51 @@ std::string inward_sphere_obj(int rings, const std::string& mtl) {
                          float(std::sin(theta) * std::sin(phi))});
         }
     v.push_back({0, -1, 0});
-    for (const Vec3& p : v) obj << "v " << p.x << " " << p.y << " " << p.z << "\n";
-    const int south = int(v.size());  // 1-based index of the last vertex
-    auto ring = [&](int i, int j) { return 2 + (i - 1) * segments + (j % segments); };
+    for (const Vec3& p : v) {
+        const Vec3 q = centre + p * radius;
+        obj << "v " << q.x << " " << q.y << " " << q.z << "\n";
+    }
+    const int south = int(v.size()) - 1;  // 0-based index of the last vertex
+    auto ring = [&](int i, int j) { return 1 + (i - 1) * segments + (j % segments); };
     auto face = [&](int a, int b, int c) {
-        // Inward: the winding normal points toward the origin, against the face's centroid.
-        const Vec3 pa = v[a - 1], pb = v[b - 1], pc = v[c - 1];
-        const Vec3 n = cross(pb - pa, pc - pa);
-        if (dot(n, pa + pb + pc) > 0) std::swap(b, c);
-        obj << "f " << a << " " << b << " " << c << "\n";
+        // The winding normal of the unit sphere's face against (inward) or along its centroid.
+        const Vec3 n = cross(v[b] - v[a], v[c] - v[a]);
+        if ((dot(n, v[a] + v[b] + v[c]) > 0) == inward) std::swap(b, c);
+        obj << "f " << first + a << " " << first + b << " " << first + c << "\n";
     };
     for (int j = 0; j < segments; ++j) {
-        face(1, ring(1, j), ring(1, j + 1));
+        face(0, ring(1, j), ring(1, j + 1));
         face(south, ring(rings - 1, j), ring(rings - 1, j + 1));
         for (int i = 1; i + 1 < rings; ++i) {
             face(ring(i, j), ring(i + 1, j), ring(i + 1, j + 1));
             face(ring(i, j), ring(i + 1, j + 1), ring(i, j + 1));
         }
     }
-    return obj.str();
+    return first + int(v.size());
 }
 
-/// The furnace scene, written and loaded: the sphere above in Lambertian kAlbedo emitting
-/// kEmitted from its inside.
-Scene furnace_scene() {
-    const auto dir = test::fresh_temp_dir("path_furnace");
+/// The furnace scene, written and loaded: a closed sphere of radius 1 about the origin, facing
+/// inward (conventions.md: Ke shines from the front side only), in Lambertian kAlbedo emitting
+/// kEmitted. With `lossless_balls`, two balls inside it that neither absorb nor emit: clear
+/// glass (illum 7, Ni 1.5) and a white ideal mirror (illum 3, Ks 1), wound outward (the glass
+/// is entered through its front), which leave the closed form unchanged.
+Scene furnace_scene(bool lossless_balls = false) {
+    const auto dir = test::fresh_temp_dir(lossless_balls ? "path_furnace_balls" : "path_furnace");
     std::ostringstream mtl;
     mtl << "newmtl wall\nKd " << kAlbedo[0] << " " << kAlbedo[1] << " " << kAlbedo[2] << "\nKe "
-        << kEmitted[0] << " " << kEmitted[1] << " " << kEmitted[2] << "\nKs 0 0 0\nillum 1\n";
+        << kEmitted[0] << " " << kEmitted[1] << " " << kEmitted[2] << "\nKs 0 0 0\nillum 1\n"
+        << "newmtl glass\nKd 0 0 0\nKs 0 0 0\nNi 1.5\nillum 7\n"
+        << "newmtl mirror\nKd 0 0 0\nKs 1 1 1\nillum 3\n";
     test::write_text_file(dir / "furnace.mtl", mtl.str());
-    return load_obj(
-        test::write_text_file(dir / "furnace.obj", inward_sphere_obj(12, "furnace.mtl")));
+    std::ostringstream obj;
+    obj.precision(9);
+    obj << "mtllib furnace.mtl\n";
+    int next = add_sphere(obj, 1, {0, 0, 0}, 1.0f, 12, true, "wall");
+    if (lossless_balls) {
+        next = add_sphere(obj, next, {0.45f, 0.1f, -0.3f}, 0.3f, 8, false, "glass");
+        add_sphere(obj, next, {0.2f, -0.35f, 0.1f}, 0.2f, 8, false, "mirror");
+    }
+    return load_obj(test::write_text_file(dir / "furnace.obj", obj.str()));
 }
 
 /// The camera inside the sphere, off its centre, looking along a skew direction with a wide
@@ -103,43 +117,52 @@ double furnace_radiance(int c, int segments) {
     return sum;
 }
 
-/// Per channel: the image's mean and the standard deviation of its pixels about the mean.
+/// Per channel, over the pixels `in` selects (all without it): their mean, the standard deviation
+/// of their values about it, the largest |pixel - expected| and how many there are.
 struct ChannelStats {
-    double mean = 0, pixel_sd = 0, worst = 0;  // worst: the largest |pixel - expected|
+    double mean = 0, pixel_sd = 0, worst = 0, pixels = 0;
 };
 
-ChannelStats channel_stats(const Image& image, int c, double expected) {
+ChannelStats channel_stats(const Image& image, int c, double expected,
+                           const std::vector<bool>* in) {
     const std::size_t pixels = image.rgb.size() / 3;
     ChannelStats s;
-    for (std::size_t i = 0; i < pixels; ++i) s.mean += image.rgb[3 * i + c];
-    s.mean /= double(pixels);
-    for (std::size_t i = 0; i < pixels; ++i) {
-        const double d = image.rgb[3 * i + c] - s.mean;
-        s.pixel_sd += d * d;
-        s.worst = std::max(s.worst, std::fabs(image.rgb[3 * i + c] - expected));
-    }
-    s.pixel_sd = std::sqrt(s.pixel_sd / double(pixels - 1));
+    for (std::size_t i = 0; i < pixels; ++i)
+        if (!in || (*in)[i]) {
+            s.mean += image.rgb[3 * i + c];
+            s.pixels += 1;
+        }
+    s.mean /= s.pixels;
+    for (std::size_t i = 0; i < pixels; ++i)
+        if (!in || (*in)[i]) {
+            const double d = image.rgb[3 * i + c] - s.mean;
+            s.pixel_sd += d * d;
+            s.worst = std::max(s.worst, std::fabs(image.rgb[3 * i + c] - expected));
+        }
+    s.pixel_sd = std::sqrt(s.pixel_sd / (s.pixels - 1));
     return s;
 }
 
-/// The furnace's image against its closed form at `max_depth`, channel by channel. Pixels are
-/// independent estimates (each has its own random numbers), so the pixels' spread estimates one
-/// pixel's Monte Carlo error: the image's mean must lie within 4 standard errors of the closed
-/// form (pixel_sd / sqrt(pixels): 6e-5 of the cases by chance), and no pixel farther than 6
-/// pixel standard deviations from it (a lost or doubled contribution in one pixel). The spread
-/// itself is bounded by `max_relative_sd` of the radiance, so that a noisy estimator cannot pass
-/// by its wide error bars.
-void check_furnace(const Image& image, int max_depth, double max_relative_sd) {
-    const double pixels = double(image.rgb.size() / 3);
+/// The furnace's image (the pixels `in` selects) against its closed form at `max_depth`, channel
+/// by channel. Pixels are independent estimates (each has its own random numbers) of one value,
+/// so where they see alike their spread estimates one pixel's Monte Carlo error: their mean must
+/// lie within 4 standard errors of the closed form (pixel_sd / sqrt(pixels): 6e-5 of the cases
+/// by chance), and no pixel farther than 6 pixel standard deviations from it (a lost or doubled
+/// contribution in one pixel). The spread itself is bounded by `max_relative_sd` of the
+/// radiance, so that a noisy estimator cannot pass by its wide error bars.
+void check_furnace(const Image& image, int max_depth, double max_relative_sd,
+                   const std::vector<bool>* in = nullptr) {
     for (int c = 0; c < 3; ++c) {
         CAPTURE(c);
         const double expected = furnace_radiance(c, max_depth);
-        const ChannelStats s = channel_stats(image, c, expected);
+        const ChannelStats s = channel_stats(image, c, expected, in);
         CAPTURE(expected);
         CAPTURE(s.mean);
         CAPTURE(s.pixel_sd);
         CAPTURE(s.worst);
-        CHECK(std::fabs(s.mean - expected) <= 4 * s.pixel_sd / std::sqrt(pixels) + 1e-6 * expected);
+        CAPTURE(s.pixels);
+        CHECK(std::fabs(s.mean - expected) <=
+              4 * s.pixel_sd / std::sqrt(s.pixels) + 1e-6 * expected);
         CHECK(s.worst <= 6 * s.pixel_sd + 1e-6 * expected);
         CHECK(s.pixel_sd <= max_relative_sd * expected);
     }
@@ -181,13 +204,45 @@ TEST_CASE("path: the furnace at each max_depth is Le (1 + a + ... + a^(max_depth
     }
 }
 
+TEST_CASE("path: glass and a mirror in the furnace change nothing: Le / (1 - a) everywhere") {
+    // Lossless delta lobes carry the enclosure's radiance unchanged: the dielectric reflects F
+    // and transmits 1 - F (no Tf, no absorption), the white mirror reflects all. A lost or
+    // doubled Fresnel share, or a refracted ray started on the wrong side, shows through them.
+    const Scene scene = furnace_scene(true);
+    const KdTree tree = build_reference(scene);
+    const RenderSettings settings = furnace_settings(32, 64, -1);
+    const RenderInputs inputs = furnace_inputs(scene, settings);
+    REQUIRE(inputs.effects.refraction);
+    REQUIRE(inputs.effects.reflection);
+    const FrameResult host = render_reference(tree, scene, inputs, 2);
+    CHECK(host.rays.refraction > 0);
+    // The wall's pixels and the balls' (by the centre ray's triangle: the wall's come first) have
+    // errors of different sizes, paths through glass more (their Fresnel choice, and roulette
+    // sooner), so each group is held to its own spread.
+    const kd_u32 wall_triangles = 2 * 24 + 2 * 24 * 10;
+    std::vector<bool> wall(host.hits.hits.size()), balls(host.hits.hits.size());
+    for (std::size_t i = 0; i < wall.size(); ++i) {
+        wall[i] = host.hits.hits[i].prim < wall_triangles;
+        balls[i] = !wall[i];
+    }
+    REQUIRE(std::count(balls.begin(), balls.end(), true) > 50);
+    check_furnace(host.image, -1, 0.1, &wall);
+    check_furnace(host.image, -1, 0.2, &balls);
+}
+
 TEST_CASE("path: the OpenCL kernel's furnace has radiance Le / (1 - a) everywhere") {
     const Scene scene = furnace_scene();
     const KdTree tree = build_reference(scene);
     const RenderSettings settings = furnace_settings(32, 32, -1);
-    const FrameResult device =
-        render_opencl(test::opencl_test_device(), tree, scene, furnace_inputs(scene, settings));
-    check_furnace(device.image, -1, 0.15);
+    // With the primary rays traced as packets (a CPU device's default) and by the pixel kernel
+    // itself (a GPU's way).
+    for (const auto packets : {RenderInputs::Packets::Auto, RenderInputs::Packets::Off}) {
+        CAPTURE(packets_name(packets));
+        RenderInputs inputs = furnace_inputs(scene, settings);
+        inputs.packets = packets;
+        const FrameResult device = render_opencl(test::opencl_test_device(), tree, scene, inputs);
+        check_furnace(device.image, -1, 0.15);
+    }
 }
 
 TEST_CASE("path: at max_depth 2 a scene under point lights is Whitted's direct light") {
