@@ -1,7 +1,8 @@
 // test_path_tracing.cpp — the path integrator ("integrator": "path", core/device/kd_path.h)
 // against closed forms: a furnace (a closed emitting Lambertian sphere around the camera), whose
-// radiance is known at every depth, and Whitted's direct light where the two must agree; then the
-// OpenCL kernel against the reference renderer on a box with every kind of material and light.
+// radiance is known at every depth, with lossless glass and a mirror inside it, on both tracers;
+// the OpenCL kernel against the reference renderer on the bundled glass room; the render file's
+// integrator through the command line. Direct light: test_path_direct.cpp.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -243,52 +244,6 @@ TEST_CASE("path: the OpenCL kernel's furnace has radiance Le / (1 - a) everywher
         const FrameResult device = render_opencl(test::opencl_test_device(), tree, scene, inputs);
         check_furnace(device.image, -1, 0.15);
     }
-}
-
-TEST_CASE("path: at max_depth 2 a scene under point lights is Whitted's direct light") {
-    // Two segments are the camera ray and a light sample: with only delta lights (nothing emits)
-    // the path integrator's estimate is deterministic, and it is Whitted's first generation:
-    // Lambert and the Blinn-Phong highlight under each light, behind shadow rays.
-    const auto dir = test::fresh_temp_dir("path_direct");
-    test::write_text_file(dir / "m.mtl",
-                          "newmtl matte\nKd 0.6 0.5 0.4\nillum 1\n"
-                          "newmtl shiny\nKd 0.2 0.3 0.4\nKs 0.5 0.5 0.5\nNs 40\nillum 2\n");
-    test::write_text_file(dir / "scene.obj",
-                          "mtllib m.mtl\nv -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\n"
-                          "v -0.5 0.2 0\nv 0.5 0.2 0\nv 0 1 0.3\n"
-                          "usemtl matte\nf 1 3 2\nf 1 4 3\nusemtl shiny\nf 5 6 7\n");
-    const Scene scene = load_obj(dir / "scene.obj");
-    const KdTree tree = build_reference(scene);
-    RenderSettings whitted;
-    whitted.width = 48;
-    whitted.height = 36;
-    whitted.spp = 2;
-    whitted.max_depth = 1;
-    // The path's background lights the scene as a sky would (docs/path-tracing.md): black here,
-    // where Whitted's first generation sees no sky.
-    whitted.background = {0, 0, 0};
-    whitted.lights = {Light{Light::Type::point, {1, 2, 1}, {}, {5, 5, 5}},
-                      Light{Light::Type::directional, {}, {-1, -2, -0.5}, {0.5, 0.4, 0.3}}};
-    whitted.camera_keys = {
-        CameraKey{0, SceneCamera(Camera{{0.5f, 2.0f, 3.0f}, {0, 0.2f, 0}, {0, 1, 0}, 50.0f})}};
-    whitted.camera_given = true;
-    RenderSettings path = whitted;
-    path.integrator = Integrator::path;
-    path.max_depth = 2;
-    const Camera camera = whitted.camera_at(0, scene.frame);
-    const FrameResult a =
-        render_reference(tree, scene, prepare_render(scene, whitted, camera, 3), 2);
-    const FrameResult b = render_reference(tree, scene, prepare_render(scene, path, camera, 3), 2);
-    double largest = 0;
-    for (std::size_t i = 0; i < a.image.rgb.size(); ++i) {
-        CAPTURE(i);
-        largest = std::max(largest, double(a.image.rgb[i]));
-        // The same terms summed in another order: a few float roundings apart.
-        CHECK(b.image.rgb[i] == doctest::Approx(a.image.rgb[i]).epsilon(1e-5).scale(1e-6));
-    }
-    CHECK(largest > 0.1);  // the lights do reach what the camera sees
-    CHECK(b.rays.shadow == a.rays.shadow);
-    CHECK(b.rays.primary == a.rays.primary);
 }
 
 TEST_CASE("path: the OpenCL kernel's image is the reference renderer's") {
