@@ -25,22 +25,25 @@ std::vector<ProgramSpec> buildable_programs(bool cpu_device, bool correctly_roun
     add("build_small.cl", build_detail::small_program_defines(cpu_device));
     add("build_output.cl", "");
 
-    // Renderer: every set of KDRAY_EFFECT_* bits, each triangle test, and packets where
-    // choose_opencl_render puts them by default (CPU devices, watertight test; --packets off
-    // leaves them out there), at each width (render_packet_lanes: 8 on AVX2, 16 on AVX-512, or
-    // KDRAY_PACKET_LANES). `--packets on` on a GPU is left out: a CPU-only path there.
-    constexpr kd_u32 kAllEffects = KDRAY_EFFECT_SHADOWS | KDRAY_EFFECT_REFLECTION |
-                                   KDRAY_EFFECT_REFRACTION | KDRAY_EFFECT_AMBIENT |
-                                   KDRAY_EFFECT_AREA_LIGHTS | KDRAY_EFFECT_TEXTURES;
+    // Renderer: every set of KDRAY_EFFECT_* bits decide_effects can make (the path integrator
+    // never with ambient light), each triangle test, and packets where choose_opencl_render puts
+    // them by default (CPU devices, watertight test; --packets off leaves them out there), at
+    // each width (render_packet_lanes: 8 on AVX2, 16 on AVX-512, or KDRAY_PACKET_LANES).
+    // `--packets on` on a GPU is left out: a CPU-only path there.
+    constexpr kd_u32 kWhittedEffects = KDRAY_EFFECT_SHADOWS | KDRAY_EFFECT_REFLECTION |
+                                       KDRAY_EFFECT_REFRACTION | KDRAY_EFFECT_AMBIENT |
+                                       KDRAY_EFFECT_AREA_LIGHTS | KDRAY_EFFECT_TEXTURES;
+    constexpr kd_u32 kPathEffects = (kWhittedEffects & ~KDRAY_EFFECT_AMBIENT) | KDRAY_EFFECT_PATH;
     for (kd_u32 intersect : {KDRAY_INTERSECT_WATERTIGHT, KDRAY_INTERSECT_MOLLER})
-        for (kd_u32 effects = 0; effects <= kAllEffects; ++effects) {
+        for (kd_u32 effects = 0; effects <= (kWhittedEffects | KDRAY_EFFECT_PATH); ++effects) {
+            if ((effects & KDRAY_EFFECT_PATH) && (effects & KDRAY_EFFECT_AMBIENT)) continue;
             OpenClRenderChoice choice;
             choice.effects = effects;
             choice.intersect = intersect;
             add("render.cl", render_program_defines(choice, correctly_rounded_divide_sqrt));
             // A device without fp64 (Intel Arc, Xe-LP) gets the float-float path: once per
-            // triangle test, with every effect.
-            if (effects == kAllEffects) {
+            // triangle test and integrator, with every effect.
+            if (effects == kWhittedEffects || effects == kPathEffects) {
                 choice.fp64 = false;
                 add("render.cl", render_program_defines(choice, correctly_rounded_divide_sqrt));
                 choice.fp64 = true;

@@ -98,7 +98,18 @@ nlohmann::json apply_overrides(const RenderCommand& command, RenderSettings& set
         settings.exposure = float(*command.exposure);
         used["exposure"] = settings.exposure;
     }
-    if (command.ray_depth) used["ray_depth"] = settings.max_depth = *command.ray_depth;
+    if (command.ray_depth) {
+        const int depth = *command.ray_depth;
+        if (settings.integrator == Integrator::path ? depth == 0 || depth < -1
+                                                    : depth < 1 || depth > KDRAY_MAX_BOUNCES)
+            throw UsageError("--ray-depth " + std::to_string(depth) +
+                             (settings.integrator == Integrator::path
+                                  ? ": the path integrator takes -1 (unbounded) or 1 to " +
+                                        std::to_string(kMaxPathDepth) + " path segments"
+                                  : ": Whitted's integrator takes 1 to " +
+                                        std::to_string(KDRAY_MAX_BOUNCES) + " ray generations"));
+        used["ray_depth"] = settings.max_depth = depth;
+    }
     if (!command.size.empty()) {
         int width = 0, height = 0;
         char x = 0, rest = 0;
@@ -121,7 +132,8 @@ std::string effects_text(const nlohmann::json& effects) {
                                     {"refraction", "refraction"},
                                     {"ambient", "ambient"},
                                     {"area_lights", "area lights"},
-                                    {"textures", "textures"}})
+                                    {"textures", "textures"},
+                                    {"path", "path tracing"}})
         if (effects.value(key, false)) text += (text.empty() ? "" : ", ") + std::string(name);
     return text.empty() ? "direct shading only" : text;
 }

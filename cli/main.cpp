@@ -24,6 +24,7 @@
 #include "cli/log.h"
 #include "core/error.h"
 #include "core/io/image_codec.h"
+#include "core/render/render_file.h"
 #include "core/version.h"
 
 namespace {
@@ -227,8 +228,9 @@ int main(int argc, char** argv) {
                            "image size WIDTHxHEIGHT, e.g. 320x240 (overrides the render file)");
     render_app
         ->add_option("--ray-depth", render.ray_depth,
-                     "most bounces of a path: the render file's max_depth (overrides it)")
-        ->check(CLI::Range(1, KDRAY_MAX_BOUNCES));
+                     "the render file's max_depth (overrides it): Whitted's ray generations, 1 "
+                     "to 16, or the path integrator's segments, -1 (unbounded) or 1 to 65536")
+        ->check(CLI::Range(-1, kdray::kMaxPathDepth));
     render_app->add_option("--exposure", render.exposure,
                            "in stops: radiance x 2^STOPS before the image is written, from -64 to "
                            "64 (overrides the render file)");

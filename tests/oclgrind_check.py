@@ -197,6 +197,18 @@ def effects_scene(folder):
     return [folder / "effects.obj"], folder / "effects.json"
 
 
+def path_scene(folder):
+    """The effects scene under the path integrator (docs/path-tracing.md): every lobe, the point
+    light and the emitter sampled, MIS, Russian roulette past the third segment. Paths of the
+    same random numbers follow the same bounces on both sides, so the image tolerance holds."""
+    objs, effects_json = effects_scene(folder)
+    r = json.loads(effects_json.read_text())
+    r.update(integrator="path", max_depth=6)
+    del r["ambient"]
+    write(folder / "path.json", json.dumps(r))
+    return objs, folder / "path.json"
+
+
 def geometry_scene(folder, name, tris, eye, target):
     write(folder / f"{name}.obj", obj_text(tris))
     write(folder / f"{name}.json", json.dumps(render_file(camera(eye, target))))
@@ -226,6 +238,7 @@ def scenes(work):
         "coincident": lambda: geometry_scene(work / "coincident", "coincident", coincident(),
                                              (0, 2, 14), (0, 0, 0)),
         "effects": lambda: effects_scene(work / "effects"),
+        "path": lambda: path_scene(work / "path"),
         "anim": lambda: animation(work / "anim"),
     }
 
@@ -248,7 +261,8 @@ CASES = {
     # rounds, its scans carried from round to round.
     "clusters-level-groups-of-64": ("clusters", ["--quality", "high", "--large-stage", "level"],
                                     ["--max-wgsize", "64"]),
-"effects": ("effects", []),
+    "effects": ("effects", []),
+    "path": ("path", []),
     "anim": ("anim", ["--quality", "medium"]),
     "reference-builder": ("coplanar", ["--builder", "reference"]),
     "reference-tracer": ("clusters", ["--tracer", "reference", "--quality", "high"]),

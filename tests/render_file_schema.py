@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """docs/render-file.schema.json against kdray's own render-file reader (core/render/render_file.cpp).
 
-1. Every render file of testdata/ and of ../shared/scenes (that part skipped, saying so, when
+1. Every render file of testdata/, scripts/render-files/ and of ../shared/scenes (that part skipped, saying so, when
    ../shared is absent) is valid under the schema.
 2. Good and bad render files made here are run through `kdray render` (a one-triangle scene, the
    reference builder and tracer, 8x8 pixels) and through the schema: a good file renders (exit 0)
@@ -67,6 +67,12 @@ GOOD = [
         "position": [0.0, 0, 3e0], "up": [0, 2, 0]}}),
     ("float range", {"background": [3.4e38, 0, 0], "lights": [{"position": [-3.4e38, 0, 0]}]}),
     ("directional light, default direction", {"lights": [{"type": "directional"}]}),
+    ("integrator whitted", {"integrator": "whitted", "max_depth": 16}),
+    ("integrator null, Whitted's depth", {"integrator": None, "max_depth": 3}),
+    ("integrator path, default depth", {"integrator": "path"}),
+    ("integrator path, unbounded", {"integrator": "path", "max_depth": -1}),
+    ("integrator path, deep", {"integrator": "path", "max_depth": 65536}),
+    ("integrator path, emitters only", {"integrator": "path", "max_depth": 1}),
 ]
 
 # (name, render file as JSON text): both kdray and the schema refuse these.
@@ -131,6 +137,13 @@ BAD_OBJECTS = [
     ("max_depth 0", {"max_depth": 0}),
     ("max_depth too large", {"max_depth": 17}),
     ("max_depth real", {"max_depth": 2.5}),
+    ("integrator unknown", {"integrator": "bdpt"}),
+    ("integrator a number", {"integrator": 1}),
+    ("max_depth -1 with Whitted", {"max_depth": -1}),
+    ("max_depth 17 with Whitted", {"integrator": "whitted", "max_depth": 17}),
+    ("path max_depth 0", {"integrator": "path", "max_depth": 0}),
+    ("path max_depth -2", {"integrator": "path", "max_depth": -2}),
+    ("path max_depth too large", {"integrator": "path", "max_depth": 65537}),
     ("$schema not a string", {"$schema": 1}),
 ]
 BAD_TEXTS = [
@@ -197,6 +210,8 @@ def main():
     files = sorted((ROOT / "testdata").rglob("render*.json"))
     if not files:
         failures.append("no render file under testdata/")
+    # The render files kept for the shared scenes (scripts/render-files/README.md).
+    files += sorted((ROOT / "scripts" / "render-files").glob("*.json"))
     scenes = pathlib.Path(args.shared) / "scenes"
     if scenes.is_dir():
         shared = sorted(scenes.rglob("render*.json"))

@@ -69,6 +69,31 @@ TEST_CASE("display: filmic by default, clamp on request, nothing else") {
           "scene/render.json: field 'display' must be \"clamp\" or \"filmic\"");
 }
 
+TEST_CASE("integrator: Whitted by default; path with its own depth, unbounded by default") {
+    const RenderSettings whitted = parse_render_json("{}", "r.json");
+    CHECK(whitted.integrator == Integrator::whitted);
+    CHECK(whitted.max_depth == 4);
+    const RenderSettings path = parse_render_json(R"({"integrator": "path"})", "r.json");
+    CHECK(path.integrator == Integrator::path);
+    CHECK(path.max_depth == -1);
+    // A path's max_depth counts segments and is not bound by Whitted's stack of 16.
+    CHECK(parse_render_json(R"({"integrator": "path", "max_depth": 100})", "r.json").max_depth ==
+          100);
+    CHECK(parse_render_json(R"({"max_depth": 7, "integrator": "path"})", "r.json").max_depth == 7);
+    CHECK(parse_render_json(R"({"integrator": null})", "r.json").integrator == Integrator::whitted);
+    CHECK(parse_error(R"({"integrator": "bdpt"})") ==
+          "scene/render.json: field 'integrator' must be \"whitted\" or \"path\"");
+    CHECK(parse_error(R"({"integrator": "path", "max_depth": 0})") ==
+          "scene/render.json: field 'max_depth' must be -1 (unbounded) or at least 1 with the "
+          "path integrator (1 sees emitters only)");
+    CHECK(parse_error(R"({"integrator": "path", "max_depth": -2})")
+              .find("field 'max_depth' must be between -1 and 65536") != std::string::npos);
+    CHECK(parse_error(R"({"max_depth": -1})").find("field 'max_depth' must be between 1 and 16") !=
+          std::string::npos);
+    CHECK(parse_error(R"({"max_depth": 17})").find("field 'max_depth' must be between 1 and 16") !=
+          std::string::npos);
+}
+
 TEST_CASE("display transforms against their closed forms") {
     // Narkowicz's fit y = x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14), evaluated apart (in
     // Python, double) at a few points; above about 7.25 it exceeds 1 and is clamped.

@@ -226,15 +226,17 @@ OpenClRenderChoice choose_opencl_render(const ClDevice& device, const RenderInpu
     choice.packet_lanes = choice.packets ? render_packet_lanes(device) : 0u;
     // The shadow rays from the packets' primary hits are traced as packets too with shadows and
     // no more lights than a bit mask holds.
-    choice.shadow_packets = choice.packets && (choice.effects & KDRAY_EFFECT_SHADOWS) != 0u &&
-                            inputs.view.light_count > 0u &&
-                            inputs.view.light_count <= KDRAY_PACKET_SHADOW_LIGHTS;
+    // The path integrator casts its own (kd_path.h) and reads none.
+    const bool path = (choice.effects & KDRAY_EFFECT_PATH) != 0u;
+    choice.shadow_packets =
+        choice.packets && !path && (choice.effects & KDRAY_EFFECT_SHADOWS) != 0u &&
+        inputs.view.light_count > 0u && inputs.view.light_count <= KDRAY_PACKET_SHADOW_LIGHTS;
     // kd_shade_traced_pixels when the packets traced the pixel's only primary ray and no ray
     // follows from a hit but shadow rays: without the pending-ray stack and the primary walk,
     // PoCL compiles it to half kd_render_pixels' time per pixel (BART Kitchen, 1024x768
     // headlight: 28 -> 15 ms).
     const bool one_ray_tree =
-        (choice.effects & (KDRAY_EFFECT_REFLECTION | KDRAY_EFFECT_REFRACTION)) == 0u;
+        !path && (choice.effects & (KDRAY_EFFECT_REFLECTION | KDRAY_EFFECT_REFRACTION)) == 0u;
     choice.pixel_kernel = choice.packets && inputs.view.spp == 1u && one_ray_tree
                               ? "kd_shade_traced_pixels"
                               : "kd_render_pixels";

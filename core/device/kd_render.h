@@ -3,7 +3,8 @@
  * between CPU and GPU. The reference image is therefore the oracle for the OpenCL image: the same
  * samples, the same rays, the same arithmetic.
  *
- * Shading is Whitted-style: emission, ambient light by Ka, Lambert diffuse and a Blinn-Phong
+ * Shading is Whitted-style by default (the path integrator of kd_path.h where the render file
+ * asks for it): emission, ambient light by Ka, Lambert diffuse and a Blinn-Phong
  * highlight under point and directional lights and emissive triangles (kd_area_light.h) with
  * shadow rays, ideal mirror reflection, and
  * dielectric reflection and refraction weighted by the Fresnel equations, up to the render file's
@@ -17,8 +18,16 @@
 
 #include "core/device/kd_area_light.h"
 #include "core/device/kd_shading.h"
-#include "core/device/kd_area_light.h"
 #include "core/device/kd_texture.h"
+
+/* The path integrator: always on the host (the reference renders either), in a kernel only when
+ * its effects ask for it, so that a Whitted program holds none of it. */
+#if !defined(KDRAY_DEVICE_CODE) || (KDRAY_COMPILED_EFFECTS & KDRAY_EFFECT_PATH) != 0
+#define KDRAY_PATH_COMPILED 1
+#include "core/device/kd_path.h"
+#else
+#define KDRAY_PATH_COMPILED 0
+#endif
 
 /* Direct light at p (geometric normal ng, facing the viewer; shading normal ns) for the eye
  * direction `dir`: the ambient light it reflects (with KDRAY_EFFECT_AMBIENT), and diffuse and
@@ -297,9 +306,17 @@ KDRAY_HOT_INLINE void kd_render_pixel(const KdSceneView* scene, const KdView* vi
         }
         KdRay primary;
         kd_primary_ray(view, x, y, s, &primary);
-        kd_trace_sample(scene, view, &primary, traced ? &hit : 0,
-                        occluded ? occluded + s * traced_stride : 0, rgb, &out.rays,
-                        view->spp == 1u ? &out.centre_hit : 0, out.normal);
+#if KDRAY_PATH_COMPILED
+        if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_PATH)) {
+            KdPathRandom random;
+            kd_path_random(view, x, y, s, &random);
+            kd_trace_path_sample(scene, view, &primary, traced ? &hit : 0, &random, rgb, &out.rays,
+                                 view->spp == 1u ? &out.centre_hit : 0, out.normal);
+        } else
+#endif
+            kd_trace_sample(scene, view, &primary, traced ? &hit : 0,
+                            occluded ? occluded + s * traced_stride : 0, rgb, &out.rays,
+                            view->spp == 1u ? &out.centre_hit : 0, out.normal);
         for (int c = 0; c < 3; ++c)
             out.rgb[c] = KDRAY_FMIN(out.rgb[c] + rgb[c], KDRAY_RADIANCE_MAX);
     }

@@ -20,6 +20,8 @@
 #define KDRAY_EXP2 exp2
 #define KDRAY_LOG2 log2
 #define KDRAY_FLOOR floor
+#define KDRAY_COS cos
+#define KDRAY_SIN sin
 #define KDRAY_ISFINITE isfinite
 #else
 #define KDRAY_EFFECT_ON(view, bit) (((view)->effects & (bit)) != 0u)
@@ -27,6 +29,8 @@
 #define KDRAY_EXP2 std::exp2
 #define KDRAY_LOG2 std::log2
 #define KDRAY_FLOOR std::floor
+#define KDRAY_COS std::cos
+#define KDRAY_SIN std::sin
 #define KDRAY_ISFINITE std::isfinite
 #endif
 

@@ -157,6 +157,9 @@ static_assert(sizeof(KdHit) == 16, "KdHit is 16 bytes on every device");
 #define KDRAY_EFFECT_AMBIENT 8u      /* Ka x the render file's ambient light */
 #define KDRAY_EFFECT_AREA_LIGHTS 16u /* emissive triangles light the scene (kd_area_light.h) */
 #define KDRAY_EFFECT_TEXTURES 32u    /* map_Kd and map_Ka at the hits' vt (kd_texture.h) */
+/* The path integrator (kd_path.h) in place of Whitted's ray tree: the render file's
+ * "integrator": "path". Never with KDRAY_EFFECT_AMBIENT, whose light it computes instead. */
+#define KDRAY_EFFECT_PATH 64u
 
 /* What kd_render_pixels reads and writes besides the image and the centre hits
  * (KdRenderLaunch.outputs): the primary rays' hits come traced already (by
@@ -247,12 +250,13 @@ typedef struct KdEmitter {
 
 /* KdView — 112 bytes: the camera basis of conventions.md and the frame's render settings.
  *   origin, forward, right, up: camera position and unit basis; tan_half_fov = tan(fov_y / 2);
- *   aspect = width / height; background colour; spp samples per pixel; max_depth <=
- *   KDRAY_MAX_BOUNCES; light_count lights, which shine only with KDRAY_EFFECT_SHADOWS (without:
- *   a headlight along the view direction, no shadow rays); effects KDRAY_EFFECT_* bits; seed
- *   for the sample jitter; ray_epsilon: how far secondary rays start off the surface (scaled to
- *   the scene by the host); emitter_count: entries of the emitter table (read only with
- *   KDRAY_EFFECT_AREA_LIGHTS); pad: 0. */
+ *   aspect = width / height; background colour; spp samples per pixel; max_depth: Whitted's
+ *   ray generations (<= KDRAY_MAX_BOUNCES), or with KDRAY_EFFECT_PATH the most path segments
+ *   (0xFFFFFFFF: unbounded, Russian roulette ends paths); light_count lights, which shine only with
+ * KDRAY_EFFECT_SHADOWS (without: a headlight along the view direction, no shadow rays); effects
+ * KDRAY_EFFECT_* bits; seed for the sample jitter; ray_epsilon: how far secondary rays start off
+ * the surface (scaled to the scene by the host); emitter_count: entries of the emitter table (read
+ * only with KDRAY_EFFECT_AREA_LIGHTS); pad: 0. */
 typedef struct KdView {
     kd_f32 origin[3];
     kd_f32 tan_half_fov;

@@ -133,7 +133,7 @@ class RenderFileParser {
         // `$schema` lets an editor find docs/render-file.schema.json; kdray only checks its type.
         check_fields(root, "",
                      {"$schema", "image", "camera", "lights", "background", "ambient", "exposure",
-                      "display", "max_depth"});
+                      "display", "integrator", "max_depth"});
         if (present(root, "$schema") && !root["$schema"].is_string())
             fail("$schema", "must be a string (the path or URL of the render file's JSON Schema)");
         if (present(root, "image")) read_image(root["image"], settings);
@@ -174,11 +174,31 @@ class RenderFileParser {
             else
                 fail("display", "must be \"clamp\" or \"filmic\"");
         }
-        // The renderer's pending-ray stack holds KDRAY_MAX_BOUNCES rays: a deeper max_depth was
-        // clamped to it without a word while stats.json recorded the value asked for.
-        if (present(root, "max_depth"))
+        if (present(root, "integrator")) {
+            const json& integrator = root["integrator"];
+            if (integrator == "whitted")
+                settings.integrator = Integrator::whitted;
+            else if (integrator == "path")
+                settings.integrator = Integrator::path;
+            else
+                fail("integrator", "must be \"whitted\" or \"path\"");
+        }
+        if (settings.integrator == Integrator::path) {
+            settings.max_depth = -1;
+            if (present(root, "max_depth")) {
+                settings.max_depth = integer(root["max_depth"], "max_depth", -1, kMaxPathDepth,
+                                             "the deepest path kdray takes");
+                if (settings.max_depth == 0)
+                    fail("max_depth",
+                         "must be -1 (unbounded) or at least 1 with the path "
+                         "integrator (1 sees emitters only)");
+            }
+        } else if (present(root, "max_depth")) {
+            // The Whitted renderer's pending-ray stack holds KDRAY_MAX_BOUNCES rays: a deeper
+            // max_depth was clamped to it without a word while stats.json recorded the value.
             settings.max_depth = integer(root["max_depth"], "max_depth", 1, KDRAY_MAX_BOUNCES,
-                                         "the most bounces kdray's renderer follows");
+                                         "the most bounces kdray's Whitted renderer follows");
+        }
         return settings;
     }
 
@@ -364,6 +384,10 @@ class RenderFileParser {
 };
 
 }  // namespace
+
+const char* integrator_name(Integrator integrator) {
+    return integrator == Integrator::path ? "path" : "whitted";
+}
 
 namespace {
 

@@ -59,6 +59,15 @@ struct Light {
     DVec3 intensity{1, 1, 1};
 };
 
+/// How a render estimates the light (conventions.md, "Integrators"; docs/path-tracing.md):
+/// Whitted's ray tree (direct light, ideal mirror and glass rays), or the path integrator.
+enum class Integrator { whitted, path };
+const char* integrator_name(Integrator integrator);
+
+/// The deepest path the path integrator takes (max_depth), past which a value is a typo; -1 is
+/// unbounded.
+inline constexpr int kMaxPathDepth = 65536;
+
 struct RenderSettings {
     std::filesystem::path path;  // empty when built from defaults
     int width = 640;
@@ -80,6 +89,10 @@ struct RenderSettings {
     /// 7, at the price of mid tones a little brighter (0.18 -> 0.27, 0.5 -> 0.62) and 1 -> 0.80.
     /// "clamp" gives the earlier images exactly.
     DisplayTransform display = DisplayTransform::filmic;
+    Integrator integrator = Integrator::whitted;
+    /// Whitted: ray generations, 1 to KDRAY_MAX_BOUNCES (default 4). Path: path segments, as
+    /// Mitsuba 3 counts them (1 sees emitters only, 2 adds direct light), 1 to kMaxPathDepth or
+    /// -1, unbounded (the default with "integrator": "path").
     int max_depth = 4;
 
     /// The camera for a frame number in `scene_frame`: the keys mapped into the frame, then

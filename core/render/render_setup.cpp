@@ -11,7 +11,8 @@ namespace kdray {
 kd_u32 Effects::bits() const {
     return (shadows ? KDRAY_EFFECT_SHADOWS : 0u) | (reflection ? KDRAY_EFFECT_REFLECTION : 0u) |
            (refraction ? KDRAY_EFFECT_REFRACTION : 0u) | (ambient ? KDRAY_EFFECT_AMBIENT : 0u) |
-           (area_lights ? KDRAY_EFFECT_AREA_LIGHTS : 0u) | (textures ? KDRAY_EFFECT_TEXTURES : 0u);
+           (area_lights ? KDRAY_EFFECT_AREA_LIGHTS : 0u) | (textures ? KDRAY_EFFECT_TEXTURES : 0u) |
+           (path ? KDRAY_EFFECT_PATH : 0u);
 }
 
 nlohmann::json Effects::to_json() const {
@@ -21,13 +22,15 @@ nlohmann::json Effects::to_json() const {
             {"ambient", ambient},
             {"area_lights", area_lights},
             {"textures", textures},
+            {"path", path},
             {"reasons",
              {{"shadows", shadows_reason},
               {"reflection", reflection_reason},
               {"refraction", refraction_reason},
               {"ambient", ambient_reason},
               {"area_lights", area_lights_reason},
-              {"textures", textures_reason}}}};
+              {"textures", textures_reason},
+              {"path", path_reason}}}};
 }
 
 Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
@@ -52,8 +55,17 @@ Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
         e.textures = true;
         e.textures_reason = "material '" + textured->name + "' has a texture";
     }
+    const bool path = settings.integrator == Integrator::path;
+    if (path) {
+        e.path = true;
+        e.path_reason = "the render file asks for \"integrator\": \"path\"";
+    } else {
+        e.path_reason = "the render file's integrator is Whitted's (the default)";
+    }
     const Vec3& light = settings.ambient;
-    if (!(light.x > 0 || light.y > 0 || light.z > 0)) {
+    if (path) {
+        e.ambient_reason = "the path integrator computes indirect light in its place";
+    } else if (!(light.x > 0 || light.y > 0 || light.z > 0)) {
         e.ambient_reason = "the render file has no ambient light";
     } else if (!ambient) {
         e.ambient_reason = "no material reflects ambient light (Ka 0)";
@@ -84,8 +96,14 @@ Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
         e.shadows = true;
         e.shadows_reason = std::to_string(settings.lights.size()) + " light(s)";
     }
-    if (settings.max_depth < 2) {
+    if (!path && settings.max_depth < 2) {
         e.reflection_reason = e.refraction_reason = "max_depth 1 allows no secondary rays";
+        return e;
+    }
+    // The path's segments: the camera's, then a light sample's; a bounce needs a third.
+    if (path && settings.max_depth >= 1 && settings.max_depth < 3) {
+        e.reflection_reason = e.refraction_reason =
+            "max_depth " + std::to_string(settings.max_depth) + " allows no bounce";
         return e;
     }
     if (mirror) {
@@ -194,7 +212,10 @@ KdView make_view(const Camera& camera, const RenderSettings& settings, const Sce
     KdView v = CameraRays(camera, settings.width, settings.height).view();
     for (int a = 0; a < 3; ++a) v.background[a] = settings.background[a];
     v.spp = kd_u32(settings.spp);
-    v.max_depth = kd_u32(std::clamp(settings.max_depth, 1, KDRAY_MAX_BOUNCES));
+    if (effects.path)
+        v.max_depth = settings.max_depth < 0 ? 0xFFFFFFFFu : kd_u32(settings.max_depth);
+    else
+        v.max_depth = kd_u32(std::clamp(settings.max_depth, 1, KDRAY_MAX_BOUNCES));
     v.light_count = kd_u32(settings.lights.size());
     v.effects = effects.bits();
     v.seed = seed;

@@ -3,8 +3,8 @@
 // shadow rays only with lights, reflection only when a material reflects, refraction only when
 // one transmits, ambient light only when the render file has some and a material reflects it
 // (Ka > 0), area lights only when a triangle with some area emits (Ke > 0), textures only when a
-// material has map_Kd or map_Ka and the scene has vt. The decision and its
-// reasons go to stats.json.
+// material has map_Kd or map_Ka and the scene has vt, the path integrator only when the render
+// file asks for it. The decision and its reasons go to stats.json.
 #pragma once
 
 #include <string>
@@ -22,8 +22,10 @@ namespace kdray {
 struct Effects {
     bool shadows = false, reflection = false, refraction = false, ambient = false;
     bool area_lights = false, textures = false;
+    /// The path integrator (kd_path.h) in place of Whitted's ray tree.
+    bool path = false;
     std::string shadows_reason, reflection_reason, refraction_reason, ambient_reason;
-    std::string area_lights_reason, textures_reason;
+    std::string area_lights_reason, textures_reason, path_reason;
 
     kd_u32 bits() const;
     nlohmann::json to_json() const;

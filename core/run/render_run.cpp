@@ -190,6 +190,7 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
         {"exact_arithmetic", tracer.exact_arithmetic()},
         {"render_file", settings_.render_file},
         {"image", {{"width", render.width}, {"height", render.height}, {"spp", render.spp}}},
+        {"integrator", integrator_name(render.integrator)},
         {"max_depth", render.max_depth},
         // The 8-bit images' transform (EXR images are linear whatever it is).
         {"display", display_name(render.display)},
