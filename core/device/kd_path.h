@@ -15,9 +15,11 @@
  * shares 1 - transmit_fraction and transmit_fraction of the surface. No private arrays: a path
  * is a loop over one ray.
  *
- * Random numbers: dimension i of sample s of pixel (x, y) is a hash of i and of the sample's key
- * (KDRAY_SAMPLE_KEY, the pixel jitter's), counter-based, so that the host and a kernel draw the
- * same numbers along the same path whatever order they trace pixels in.
+ * Random numbers: dimension i of sample s of pixel (x, y) is coordinate i & 1 of point s of the
+ * pixel's R2 sequence (kd_shading.h), rotated by a hash of the pixel's key and of i / 2: a
+ * function of (pixel, s, i) alone, so that the host and a kernel draw the same numbers along the
+ * same path whatever order they trace pixels in, and a pixel's samples are stratified in each
+ * pair of dimensions (the light sample's point, the lobe's direction).
  */
 #ifndef KDRAY_KD_PATH_H
 #define KDRAY_KD_PATH_H
@@ -33,15 +35,21 @@
  * so that a path of throughput 1 (a white mirror room) still ends. */
 #define KDRAY_PATH_MAX_SURVIVAL 0.95f
 
-/* The random numbers of one sample: its key and the dimensions drawn so far. */
+/* The random numbers of one sample: its pixel's key (the sample's own with independent
+ * samples), its index, the dimensions drawn so far, and whether the samples are independent. */
 typedef struct KdPathRandom {
     kd_u32 key;
+    kd_u32 sample;
     kd_u32 dimension;
+    kd_u32 independent;
 } KdPathRandom;
 
 KDRAY_INLINE kd_f32 kd_path_uniform(KdPathRandom* r) {
-    r->dimension += 1u;
-    return kd_unit_float(kd_hash(r->key ^ kd_hash(r->dimension * 0x9E3779B9u)));
+    const kd_u32 d = r->dimension++;
+    if (r->independent) return kd_unit_float(kd_hash(r->key ^ kd_hash((d + 1u) * 0x9E3779B9u)));
+    kd_u32 rotation = kd_hash(r->key ^ kd_hash((d >> 1) * 0x9E3779B9u + 0x632BE5ABu));
+    if (d & 1u) rotation = kd_hash(rotation);
+    return kd_unit_float(rotation + r->sample * ((d & 1u) ? KDRAY_R2_STEP1 : KDRAY_R2_STEP0));
 }
 
 /* A unit-length basis (t, b, n) around the unit vector n, without a branch on which axis to
@@ -410,7 +418,11 @@ KDRAY_HOT_INLINE void kd_trace_path_sample(const KdSceneView* scene, const KdVie
  * 21.10 cannot run.) */
 KDRAY_INLINE void kd_path_random(const KdView* view, kd_u32 x, kd_u32 y, kd_u32 s,
                                  KdPathRandom* r) {
-    r->key = kd_hash(KDRAY_SAMPLE_KEY(view, x, y, s) ^ 0x68E31DA4u);
+    r->independent = view->sampler == KDRAY_SAMPLER_INDEPENDENT;
+    r->key =
+        kd_hash((r->independent ? KDRAY_SAMPLE_KEY(view, x, y, s) : KDRAY_PIXEL_KEY(view, x, y)) ^
+                0x68E31DA4u);
+    r->sample = s;
     r->dimension = 0u;
 }
 

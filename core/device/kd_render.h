@@ -241,8 +241,16 @@ KDRAY_HOT_INLINE void kd_primary_ray(const KdView* view, kd_u32 x, kd_u32 y, kd_
         kd_camera_ray(view, (kd_f32)x + 0.5f, (kd_f32)y + 0.5f, ray);
         return;
     }
-    const kd_u32 h = kd_hash(KDRAY_SAMPLE_KEY(view, x, y, r));
-    kd_camera_ray(view, (kd_f32)x + kd_unit_float(h), (kd_f32)y + kd_unit_float(kd_hash(h)), ray);
+    if (view->sampler == KDRAY_SAMPLER_INDEPENDENT) {
+        const kd_u32 h = kd_hash(KDRAY_SAMPLE_KEY(view, x, y, r));
+        kd_camera_ray(view, (kd_f32)x + kd_unit_float(h), (kd_f32)y + kd_unit_float(kd_hash(h)),
+                      ray);
+        return;
+    }
+    /* The pixel's R2 sequence (kd_shading.h) in the jitter's own rotation. */
+    const kd_u32 h = kd_hash(KDRAY_PIXEL_KEY(view, x, y));
+    kd_camera_ray(view, (kd_f32)x + kd_unit_float(h + r * KDRAY_R2_STEP0),
+                  (kd_f32)y + kd_unit_float(kd_hash(h) + r * KDRAY_R2_STEP1), ray);
 }
 
 /* The `cost` AOV of pixel (x, y): the nodes visited and triangles tested by the walk of its

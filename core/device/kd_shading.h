@@ -100,7 +100,9 @@ KDRAY_INLINE kd_f32 kd_dot3(const kd_f32* a, const kd_f32* b) {
  *   KDRAY_INV_LENGTH3   1 / |(x, y, z)|, by which kd_normalize3 scales
  *   KDRAY_SCREEN_X/Y    conventions.md's sx and sy of image position (px, py) in pixels
  *   KDRAY_CAMERA_DIR    axis a of the direction before normalising, f + (r * sx + u * sy)
- *   KDRAY_SAMPLE_KEY    what kd_hash turns into the jitter of sample r of pixel (x, y)
+ *   KDRAY_SAMPLE_KEY    what kd_hash turns into the jitter of sample r of pixel (x, y), when
+ *                       the samples are independent (KDRAY_SAMPLER_INDEPENDENT)
+ *   KDRAY_PIXEL_KEY     what kd_hash turns into the rotation of pixel (x, y)'s sample sequence
  *   KDRAY_UNIT_FLOAT    a hash's top 24 bits as a float in [0, 1), through `to_float` */
 #define KDRAY_INV_LENGTH3(x, y, z) (1.0f / KDRAY_SQRT((x) * (x) + (y) * (y) + (z) * (z)))
 #define KDRAY_SCREEN_X(view, px) \
@@ -111,6 +113,15 @@ KDRAY_INLINE kd_f32 kd_dot3(const kd_f32* a, const kd_f32* b) {
     ((view)->forward[a] + ((view)->right[a] * (sx) + (view)->up[a] * (sy)))
 #define KDRAY_SAMPLE_KEY(view, x, y, r) \
     (((y) * (view)->width + (x)) * 0x9E3779B9u ^ kd_hash((r) + (view)->seed))
+#define KDRAY_PIXEL_KEY(view, x, y) (((y) * (view)->width + (x)) * 0x9E3779B9u ^ (view)->seed)
+/* A pixel's samples are low-discrepancy (#30): sample s's numbers in a pair of dimensions are the
+ * R2 sequence's point s (Roberts 2018: the Kronecker sequence of the plastic number g, steps 1/g
+ * and 1/g^2), rotated per pixel and pair by a hash (Cranley & Patterson 1976). Each number is
+ * uniform for any rotation, so estimates stay unbiased, and a pixel's samples cover each pair's
+ * square evenly instead of clumping as independent hashes do. The steps are 2^32 / g and
+ * 2^32 / g^2 in 32-bit fixed point: the wrap-around of s * step is the fraction, exact at any s. */
+#define KDRAY_R2_STEP0 3242174889u
+#define KDRAY_R2_STEP1 2447445414u
 #define KDRAY_UNIT_FLOAT(to_float, h) (to_float((h) >> 8) * (1.0f / 16777216.0f))
 
 /* Unit vector, computed as Embree's peer does (multiply by 1 / length), so that centre rays

@@ -256,7 +256,10 @@ typedef struct KdEmitter {
  * KDRAY_EFFECT_SHADOWS (without: a headlight along the view direction, no shadow rays); effects
  * KDRAY_EFFECT_* bits; seed for the sample jitter; ray_epsilon: how far secondary rays start off
  * the surface (scaled to the scene by the host); emitter_count: entries of the emitter table (read
- * only with KDRAY_EFFECT_AREA_LIGHTS); pad: 0. */
+ * only with KDRAY_EFFECT_AREA_LIGHTS); sampler: KDRAY_SAMPLER_LOW_DISCREPANCY (0, every render's)
+ * or KDRAY_SAMPLER_INDEPENDENT (tests whose statistics assume independent samples); pad: 0. */
+#define KDRAY_SAMPLER_LOW_DISCREPANCY 0u
+#define KDRAY_SAMPLER_INDEPENDENT 1u
 typedef struct KdView {
     kd_f32 origin[3];
     kd_f32 tan_half_fov;
@@ -274,7 +277,8 @@ typedef struct KdView {
     kd_u32 seed;
     kd_f32 ray_epsilon;
     kd_u32 emitter_count;
-    kd_u32 pad[2];
+    kd_u32 sampler;
+    kd_u32 pad;
 } KdView;
 
 /* KdRayCounts — 20 bytes: rays cast for one pixel, by kind; area_shadow: shadow rays toward

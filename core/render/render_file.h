@@ -94,6 +94,10 @@ struct RenderSettings {
     /// Mitsuba 3 counts them (1 sees emitters only, 2 adds direct light), 1 to kMaxPathDepth or
     /// -1, unbounded (the default with "integrator": "path").
     int max_depth = 4;
+    /// Independent random numbers per sample (KDRAY_SAMPLER_INDEPENDENT) instead of each pixel's
+    /// low-discrepancy sequence: not a render-file field; for tests whose statistics assume
+    /// independent samples.
+    bool independent_samples = false;
 
     /// The camera for a frame number in `scene_frame`: the keys mapped into the frame, then
     /// interpolated linearly in float, the nearest key held before the first and after the last.

@@ -219,6 +219,8 @@ KdView make_view(const Camera& camera, const RenderSettings& settings, const Sce
     v.light_count = kd_u32(settings.lights.size());
     v.effects = effects.bits();
     v.seed = seed;
+    v.sampler =
+        settings.independent_samples ? KDRAY_SAMPLER_INDEPENDENT : KDRAY_SAMPLER_LOW_DISCREPANCY;
     // Secondary rays start a little off the surface: far enough to clear the rounding of the hit
     // point (a few ulps of the largest coordinate), small against the scene.
     Aabb b = scene.bounds();

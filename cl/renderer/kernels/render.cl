@@ -71,10 +71,15 @@ KDRAY_INLINE kd_packet_float kd_packet_unit_float(kd_packet_uint h) {
 KDRAY_INLINE KdPacketRays kd_primary_packet(const KdView* view, kd_packet_uint x, kd_packet_uint y,
                                             kd_u32 r, kd_packet_int valid) {
     kd_packet_float px = kd_packet_convert_float(x) + 0.5f, py = kd_packet_convert_float(y) + 0.5f;
-    if (view->spp > 1u && r != view->spp) {
+    if (view->spp > 1u && r != view->spp && view->sampler == KDRAY_SAMPLER_INDEPENDENT) {
         const kd_packet_uint h = kd_packet_hash(KDRAY_SAMPLE_KEY(view, x, y, r));
         px = kd_packet_convert_float(x) + kd_packet_unit_float(h);
         py = kd_packet_convert_float(y) + kd_packet_unit_float(kd_packet_hash(h));
+    } else if (view->spp > 1u && r != view->spp) {
+        const kd_packet_uint h = kd_packet_hash(KDRAY_PIXEL_KEY(view, x, y));
+        px = kd_packet_convert_float(x) + kd_packet_unit_float(h + r * KDRAY_R2_STEP0);
+        py = kd_packet_convert_float(y) +
+             kd_packet_unit_float(kd_packet_hash(h) + r * KDRAY_R2_STEP1);
     }
     const kd_packet_float sx = KDRAY_SCREEN_X(view, px);
     const kd_packet_float sy = KDRAY_SCREEN_Y(view, py);
