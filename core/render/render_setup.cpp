@@ -100,10 +100,10 @@ Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
         e.reflection_reason = e.refraction_reason = "max_depth 1 allows no secondary rays";
         return e;
     }
-    // The path's segments: the camera's, then a light sample's; a bounce needs a third.
-    if (path && settings.max_depth >= 1 && settings.max_depth < 3) {
-        e.reflection_reason = e.refraction_reason =
-            "max_depth " + std::to_string(settings.max_depth) + " allows no bounce";
+    // The path's first segment is the camera's; a second may leave a mirror or glass and see an
+    // emitter (Mitsuba counts it so), so only max_depth 1 has no use for them.
+    if (path && settings.max_depth == 1) {
+        e.reflection_reason = e.refraction_reason = "max_depth 1 allows no bounce";
         return e;
     }
     if (mirror) {
