@@ -190,14 +190,20 @@ TEST_CASE("stats.json fields of the wrong type are named before anything renders
     struct Case {
         std::string stats, field;
     };
-    for (const Case& c : std::vector<Case>{
-             {R"({"summary":{},"frames":[{"frame":0,"input":5}]})", "frames[0].input"},
-             {R"({"summary":{},"frames":[{"frame":0,"image":[]}]})", "frames[0].image"},
-             {R"({"summary":{},"frames":[],"builder":5})", "builder"},
-             {R"({"summary":{},"frames":[],"tracer":{}})", "tracer"},
-             {R"({"summary":{},"frames":[],"runs":[3]})", "runs[0]"},
-             {R"({"summary":{},"frames":[],"failed_frames":[{"frame":1,"input":false}]})",
-              "failed_frames[0].input"}}) {
+    for (
+        const Case& c : std::vector<Case>{
+            {R"({"summary":{},"frames":[{"frame":0,"input":5}]})", "frames[0].input"},
+            {R"({"summary":{},"frames":[{"frame":0,"image":[]}]})", "frames[0].image"},
+            {R"({"summary":{},"frames":[],"builder":5})", "builder"},
+            {R"({"summary":{},"frames":[],"tracer":{}})", "tracer"},
+            {R"({"summary":{},"frames":[],"runs":[3]})", "runs[0]"},
+            {R"({"summary":{},"frames":[],"failed_frames":[{"frame":1,"input":false}]})",
+             "failed_frames[0].input"},
+            // Times kdray never writes: two of 1e308 ms summed to inf in the summary (found by
+            // fuzz_stats_json), and a negative one made a negative mean.
+            {R"({"summary":{},"frames":[{"frame":0,"frame_ms":1e308},{"frame":1,"frame_ms":1e308}]})",
+             "frames[0].frame_ms"},
+            {R"({"summary":{},"frames":[{"frame":0,"trace_ms":-1}]})", "frames[0].trace_ms"}}) {
         CAPTURE(c.stats);
         write_text_file(out / "stats.json", c.stats);
         check_error(render(obj, out, camera, "reference"), 1, {"stats.json: " + c.field});
