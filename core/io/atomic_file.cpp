@@ -314,7 +314,11 @@ void remove_stale_temporaries(const fs::path& dir) {
     std::error_code ec;
     for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
         if (!is_own_hosts_temporary(it->path().filename().string())) continue;
-        const int fd = ::open(it->path().c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+        // Read-write where it may: NFS emulates flock with a POSIX write lock, which a descriptor
+        // open only for reading cannot take (there it fails, and the file stays).
+        const int flags = O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC;
+        int fd = ::open(it->path().c_str(), O_RDWR | flags);
+        if (fd < 0) fd = ::open(it->path().c_str(), O_RDONLY | flags);
         if (fd < 0) continue;
         struct stat info {};
         // Stale when no one holds its lock: its writer died (SIGKILL, a power cut), in whichever
