@@ -31,13 +31,19 @@ namespace {
 
 /// A scratch folder of this process's own: libFuzzer's workers run side by side.
 const fs::path& scratch() {
-    static const fs::path dir = [] {
+    // Never destroyed: the atexit handler below reads it after static destructors have run.
+    static const fs::path& dir = *new fs::path([] {
         const fs::path base =
             fs::exists("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
         const fs::path d = base / ("kdray-fuzz-texture-" + std::to_string(::getpid()));
         fs::create_directories(d);
+        // Gone when libFuzzer ends the run (exit); a crash leaves it, with the input that did.
+        std::atexit([] {
+            std::error_code ignored;
+            fs::remove_all(scratch(), ignored);
+        });
         return d;
-    }();
+    }());
     return dir;
 }
 
