@@ -14,7 +14,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_common import ROOT, run_record, write_json  # noqa: E402
 
-TARGETS = ("obj", "render_file", "mtl", "tree_file")
+TARGETS = ("obj", "render_file", "mtl", "tree_file", "texture", "stats_json")
 
 
 def target_row(build_dir, target, seconds):

@@ -187,34 +187,158 @@ class Cluster:
             state, tail(self.work / "slurmctld.log"), tail(self.work / "slurmd.log")))
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--kdray", required=True)
-    parser.add_argument("--keep", action="store_true", help="keep the temporary folder")
-    args = parser.parse_args()
-    kdray = str(pathlib.Path(args.kdray).resolve())
+# A shim for shard A of namespaces_case: every rename of a kdray temporary waits, so that the
+# temporary is live (written, not yet renamed into place) for long enough that shard B starts,
+# and cleans up the folder, while it is there. Without it the window is a millisecond.
+RENAME_DELAY_C = r"""
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+int rename(const char* from, const char* to) {
+    static int (*real)(const char*, const char*);
+    if (!real) real = (int (*)(const char*, const char*))dlsym(RTLD_NEXT, "rename");
+    const char* ms = getenv("KDRAY_TEST_RENAME_DELAY_MS");
+    if (ms && strstr(from, ".kdray.tmp@")) usleep((useconds_t)atoi(ms) * 1000);
+    return real(from, to);
+}
+"""
+NAMESPACE_SHARDS = 2
 
+
+def unshare_command():
+    """The unshare that gives a command a PID namespace of its own here, or Skip."""
+    if not shutil.which("unshare"):
+        raise Skip("unshare (util-linux) not installed")
+    tried = []
+    for command in (["unshare", "--pid", "--fork", "--mount-proc"],
+                    ["unshare", "-r", "--pid", "--fork", "--mount-proc"]):
+        probe = subprocess.run(command + ["sh", "-c", "echo $$"], capture_output=True,
+                               text=True, timeout=60)
+        if probe.returncode == 0 and probe.stdout.strip() == "1":
+            return command
+        tried.append("%s: %s" % (" ".join(command), probe.stderr.strip() or probe.stdout.strip()))
+    raise Skip("no PID namespace may be made here (%s)" % "; ".join(tried))
+
+
+def namespaces_case(kdray, work, failures):
+    """Two shards of scripts/slurm-render.sh, each in a PID namespace of its own on this host,
+    rendering into one folder at once: as two Slurm nodes' shards do into a shared folder when
+    they run in containers, or under Slurm's job_container plugins. Both share the host name, and
+    a process id in one means nothing in the other: shard B, starting, took shard A's live
+    temporary for a dead process's and deleted it, and A's frame failed ("cannot rename the
+    finished file into place"). Checks that both shards' frames and stats land, that nothing is
+    left behind, and that nothing of the user's is deleted."""
+    unshare = unshare_command()
+    compiler = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
+    if not compiler:
+        raise Skip("no C compiler for the rename-delay shim")
+    work.mkdir()
+    shim = work / "rename_delay.so"
+    (work / "rename_delay.c").write_text(RENAME_DELAY_C)
+    subprocess.run([compiler, "-shared", "-fPIC", "-o", str(shim), str(work / "rename_delay.c"),
+                    "-ldl"], check=True, timeout=120)
+
+    out = work / "out"
+    out.mkdir()
+    # What is not this run's, and stays: a user's file named like an old temporary, and another
+    # node's temporary (whose lock, on a shared folder, may be one only that node sees).
+    users = {".holiday.tmp2023.tar": "the user's",
+             ".frame_099.png.kdray.tmp@another-node@7@0123456789abcdef.png": "another node's"}
+    for name, text in users.items():
+        (out / name).write_text(text)
+    frames = str(ROOT / "testdata" / "anim" / "*.obj")
+    render_json = str(ROOT / "testdata" / "anim" / "render.json")
+    script = str(ROOT / "scripts" / "slurm-render.sh")
+
+    def shard(index, prelude="", delay_ms=None):
+        env = dict(os.environ, KDRAY=kdray, SLURM_ARRAY_TASK_ID=str(index),
+                   SLURM_ARRAY_TASK_COUNT=str(NAMESPACE_SHARDS))
+        if delay_ms:
+            env.update(LD_PRELOAD=str(shim), KDRAY_TEST_RENAME_DELAY_MS=str(delay_ms))
+        # Not exec'd by sh: the shard is not process 1 of its namespace.
+        command = '%sbash "$0" "$@"; exit $?' % prelude
+        return subprocess.Popen(
+            unshare + ["sh", "-c", command, script, frames, render_json, str(out), "--size", SIZE,
+                       "--quiet"],
+            cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+    # Shard A's kdray runs as process ~300 of its namespace, one that B's namespace does not
+    # have (in both as process 2, the same number would have hidden the problem), and each of
+    # its temporaries lives 3 s.
+    a = shard(0, prelude="seq 300 | xargs -n1 true; ", delay_ms=3000)
+    deadline = time.time() + 300
+    while not any(".kdray.tmp@" in n and n not in users for n in os.listdir(out)):
+        if a.poll() is not None or time.time() > deadline:
+            failures.append("namespaces: shard A wrote no temporary (exit %s): %s" %
+                            (a.poll(), a.communicate()[0].strip() if a.poll() is not None
+                             else "timed out"))
+            if a.poll() is None:
+                a.kill()
+                a.wait()
+            return
+        time.sleep(0.01)
+    live = sorted(n for n in os.listdir(out) if ".kdray.tmp@" in n and n not in users)
+    print("shard A is writing %s; shard B starts" % live)
+    b = shard(1)
+    outputs = {}
+    for name, p in (("B", b), ("A", a)):
+        try:
+            text = p.communicate(timeout=600)[0].strip()
+        except subprocess.TimeoutExpired:
+            p.kill()
+            text = p.communicate()[0].strip() + " (killed after 600 s)"
+        outputs[name] = text
+        print("shard %s (exit %d)%s" % (name, p.returncode, ": " + text if text else ""))
+        if p.returncode != 0:
+            failures.append("namespaces: shard %s exited %d: %s" % (name, p.returncode, text))
+
+    names = set(os.listdir(out))
+    for name, whose in users.items():
+        if name not in names or (out / name).read_text() != whose:
+            failures.append("namespaces: %s file %s was deleted or changed" % (whose, name))
+    left = sorted(n for n in names if ".kdray.tmp@" in n and n not in users)
+    if left:
+        failures.append("namespaces: temporaries left behind: %s" % left)
+    want = len(list((ROOT / "testdata" / "anim").glob("*.obj")))
+    try:
+        stats = json.loads((out / "stats.json").read_text())
+    except (OSError, ValueError) as e:
+        failures.append("namespaces: no stats.json: %s" % e)
+        return
+    recorded = sorted(f["frame"] for f in stats.get("frames", []))
+    if recorded != list(range(want)):
+        failures.append("namespaces: stats.json records frames %s; the shards render 0..%d" %
+                        (recorded, want - 1))
+    if len(stats.get("runs", [])) != NAMESPACE_SHARDS:
+        failures.append("namespaces: stats.json lists %d runs, not %d" %
+                        (len(stats.get("runs", [])), NAMESPACE_SHARDS))
+    if stats.get("failed_frames"):
+        failures.append("namespaces: failed frames %s" % stats["failed_frames"])
+    for f in stats.get("frames", []):
+        if not (out / f["image"]).is_file():
+            failures.append("namespaces: frame %d's %s is missing" % (f["frame"], f["image"]))
+    if not any(x.startswith("namespaces") for x in failures):
+        print("two shards in two PID namespaces rendered frames %s into one folder; runs %s" %
+              (recorded, [r.get("frames_rendered") for r in stats["runs"]]))
+
+
+def cluster_case(kdray, work, failures):
+    """The job array on the one-node cluster, in `work`; raises Skip when it cannot be had."""
     if os.geteuid() != 0:
-        print("SKIP: the one-node Slurm cluster needs root (its daemons run as root)")
-        return SKIP
+        raise Skip("the one-node Slurm cluster needs root (its daemons run as root)")
     missing = [t for t in ("munged", "munge", "unmunge", "slurmctld", "slurmd", "sbatch",
                            "sinfo") if not shutil.which(t)]
     if missing:
-        print("SKIP: %s not installed (scripts/install-deps.sh --slurm)" % ", ".join(missing))
-        return SKIP
-
-    work = pathlib.Path(tempfile.mkdtemp(prefix="kdray-slurm-"))
+        raise Skip("%s not installed (scripts/install-deps.sh --slurm)" % ", ".join(missing))
+    work.mkdir()
     work.chmod(0o755)  # slurmd's job steps read the scripts' output folders as root anyway
-    failures = []
     try:
         with Cluster(work) as cluster:
-            try:
-                cluster.start_munge()
-                cluster.write_conf()
-                cluster.start_slurm()
-            except Skip as e:
-                print("SKIP: %s" % e)
-                return SKIP
+            cluster.start_munge()
+            cluster.write_conf()
+            cluster.start_slurm()
             print("cluster up: %s" % cluster.conf)
 
             frames = str(ROOT / "testdata" / "anim" / "*.obj")
@@ -292,6 +416,29 @@ def main():
                 print("kdray stats: %d frames %s" % (summary["frames"], numbers))
     except RuntimeError:
         pass
+    if not failures:
+        print("the job array's %d shards rendered the frames of one run" % SHARDS)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--kdray", required=True)
+    parser.add_argument("--keep", action="store_true", help="keep the temporary folder")
+    args = parser.parse_args()
+    kdray = str(pathlib.Path(args.kdray).resolve())
+
+    work = pathlib.Path(tempfile.mkdtemp(prefix="kdray-slurm-"))
+    work.chmod(0o755)
+    failures, skipped = [], []
+    try:
+        for name, case in (("two PID namespaces", namespaces_case),
+                           ("the Slurm job array", cluster_case)):
+            print("== %s" % name)
+            try:
+                case(kdray, work / name.replace(" ", "-"), failures)
+            except Skip as e:
+                print("SKIP: %s: %s" % (name, e))
+                skipped.append(name)
     finally:
         if args.keep:
             print("kept %s" % work)
@@ -303,8 +450,8 @@ def main():
         for f in failures:
             print("  " + f)
         return 1
-    print("\nthe job array's %d shards rendered the frames of one run" % SHARDS)
-    return 0
+    # A case that could not run is said, and the test reported skipped rather than passed.
+    return SKIP if skipped else 0
 
 
 if __name__ == "__main__":

@@ -4,6 +4,8 @@
 // a killed run left behind. Each runs the binary: one `kdray: error:` line naming the file, exit 1
 // (2 for usage), nothing hangs, nothing the user owns is replaced.
 #include <doctest/doctest.h>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <unistd.h>
@@ -403,16 +405,24 @@ TEST_CASE("a stem at the file name limit renders; temporaries of a killed run ar
     CHECK(fs::exists(out / (stem + ".exr")));
     CHECK(fs::exists(out / (stem + ".aov.exr")));
 
-    // A temporary whose writer no longer runs goes; one of a live process (this test) stays.
-    // temporary_path names them as kdray does on this host, for this process's id.
+    // A temporary whose writer no longer runs goes; one that a live writer (this test) holds
+    // locked, as kdray's writers hold theirs, stays. temporary_path names them as kdray does on
+    // this host, for this process's id.
     const fs::path live = kdray::temporary_path(out / "frame.png");
-    const std::string pid = "@" + std::to_string(::getpid()) + "@";
+    // Appended piece by piece: GCC 12 warns falsely (-Wstringop-overflow) on "@" + std::string.
+    std::string pid = "@";
+    pid += std::to_string(::getpid());
+    pid += '@';
     std::string dead_name = live.filename().string();
     dead_name.replace(dead_name.find(pid), pid.size(), "@2147483600@");  // above any pid_max
     write_text_file(out / dead_name, "half");
     write_text_file(live, "in progress");
+    const int live_lock = ::open(live.c_str(), O_RDONLY | O_CLOEXEC);
+    REQUIRE(live_lock >= 0);
+    REQUIRE(::flock(live_lock, LOCK_EX) == 0);
     write_text_file(out / ".user-notes.tmp", "not ours");
     r = render(obj, out, camera);
+    ::close(live_lock);
     CHECK(r.status == 0);
     CHECK_FALSE(fs::exists(out / dead_name));
     CHECK(fs::exists(live));

@@ -5,6 +5,7 @@
 // line naming the file and the problem, exit 1 (2 for usage), no crash, nothing lost.
 #include <doctest/doctest.h>
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -190,14 +191,20 @@ TEST_CASE("stats.json fields of the wrong type are named before anything renders
     struct Case {
         std::string stats, field;
     };
-    for (const Case& c : std::vector<Case>{
-             {R"({"summary":{},"frames":[{"frame":0,"input":5}]})", "frames[0].input"},
-             {R"({"summary":{},"frames":[{"frame":0,"image":[]}]})", "frames[0].image"},
-             {R"({"summary":{},"frames":[],"builder":5})", "builder"},
-             {R"({"summary":{},"frames":[],"tracer":{}})", "tracer"},
-             {R"({"summary":{},"frames":[],"runs":[3]})", "runs[0]"},
-             {R"({"summary":{},"frames":[],"failed_frames":[{"frame":1,"input":false}]})",
-              "failed_frames[0].input"}}) {
+    for (
+        const Case& c : std::vector<Case>{
+            {R"({"summary":{},"frames":[{"frame":0,"input":5}]})", "frames[0].input"},
+            {R"({"summary":{},"frames":[{"frame":0,"image":[]}]})", "frames[0].image"},
+            {R"({"summary":{},"frames":[],"builder":5})", "builder"},
+            {R"({"summary":{},"frames":[],"tracer":{}})", "tracer"},
+            {R"({"summary":{},"frames":[],"runs":[3]})", "runs[0]"},
+            {R"({"summary":{},"frames":[],"failed_frames":[{"frame":1,"input":false}]})",
+             "failed_frames[0].input"},
+            // Times kdray never writes: two of 1e308 ms summed to inf in the summary (found by
+            // fuzz_stats_json), and a negative one made a negative mean.
+            {R"({"summary":{},"frames":[{"frame":0,"frame_ms":1e308},{"frame":1,"frame_ms":1e308}]})",
+             "frames[0].frame_ms"},
+            {R"({"summary":{},"frames":[{"frame":0,"trace_ms":-1}]})", "frames[0].trace_ms"}}) {
         CAPTURE(c.stats);
         write_text_file(out / "stats.json", c.stats);
         check_error(render(obj, out, camera, "reference"), 1, {"stats.json: " + c.field});
@@ -351,7 +358,10 @@ TEST_CASE("stale-temporary cleanup removes only kdray's own, of this host, of a 
     // Any `.NAME.tmpN[.ext]` whose process N did not run was taken for a stale temporary: a
     // user's `.holiday.tmp2023.tar` was deleted, an input so named vanished before it loaded, and
     // shards on two nodes rendering into one shared folder deleted each other's live
-    // temporaries. kdray's temporaries now carry a marker, the host and a random part.
+    // temporaries. kdray's temporaries now carry a marker, the host and a random part, and are
+    // locked (flock) while they live: shards in two PID namespaces of one host share the host
+    // name, and a process id of one means nothing in the other (tests/slurm_render.py runs that
+    // case; here the same as a name whose process runs but that no one locks).
     const fs::path dir = fresh_temp_dir("round3-temporaries");
     const fs::path out = dir / "out";
     const fs::path obj = write_text_file(dir / "tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
@@ -361,12 +371,18 @@ TEST_CASE("stale-temporary cleanup removes only kdray's own, of this host, of a 
     const std::string dead = "2147483600";  // above any pid_max: no process has it
     // This host's and this process's temporary name for out/frame.png, and variants of it.
     const std::string live = kdray::temporary_path(out / "frame.png").filename().string();
-    const std::string pid = "@" + std::to_string(::getpid()) + "@";
+    // Appended piece by piece: GCC 12 warns falsely (-Wstringop-overflow) on "@" + std::string.
+    std::string pid = "@";
+    pid += std::to_string(::getpid());
+    pid += '@';
     const std::size_t pid_at = live.find(pid);
     REQUIRE(pid_at != std::string::npos);
     REQUIRE(live.find(".kdray.tmp@") != std::string::npos);
-    std::string stale = live, other_host = live;
+    std::string stale = live, other_host = live, unlocked = live;
     stale.replace(pid_at, pid.size(), "@" + dead + "@");
+    // This process runs, but holds no lock on it: in another PID namespace of this host, a
+    // kdray killed mid-write may have had this test's process id.
+    unlocked.replace(unlocked.size() - 20, 16, "0123456789abcdef");
     other_host.replace(live.find(".kdray.tmp@") + 11, pid_at - live.find(".kdray.tmp@") - 11,
                        "another-node");
     other_host.replace(other_host.find(pid), pid.size(), "@" + dead + "@");
@@ -375,10 +391,15 @@ TEST_CASE("stale-temporary cleanup removes only kdray's own, of this host, of a 
         ".frame.png.tmp" + dead + ".png",  // kdray's old pattern, now a user's name
         ".notes.kdray.tmp@x",              // the marker without the fields after it
         other_host,                        // a dead pid on another node means nothing here
-        live,                              // a running process (this test) is writing it
+        live,                              // a process (this test) holds its lock
         stale.substr(0, stale.size() - 4) + "Z.png"};  // not 16 hex digits of kdray's
     for (const std::string& name : kept) write_text_file(out / name, "keep " + name);
+    // Locked as kdray's writer locks it, for as long as the render below runs.
+    const int live_lock = ::open((out / live).c_str(), O_RDONLY | O_CLOEXEC);
+    REQUIRE(live_lock >= 0);
+    REQUIRE(::flock(live_lock, LOCK_EX) == 0);
     write_text_file(out / stale, "half");
+    write_text_file(out / unlocked, "half");
     // An input named like an old temporary, inside the folder: it loads and renders.
     const fs::path input = write_text_file(out / (".scene.tmp" + dead + ".obj"),
                                            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
@@ -394,5 +415,7 @@ TEST_CASE("stale-temporary cleanup removes only kdray's own, of this host, of a 
         CHECK(read_file(out / name) == "keep " + name);
     }
     CHECK_FALSE(fs::exists(out / stale));
+    CHECK_FALSE(fs::exists(out / unlocked));
+    ::close(live_lock);
     fs::remove_all(dir);
 }

@@ -66,6 +66,13 @@ bool make_hostile(const fs::path& path, const std::string& kind) {
         write_text_file(path, png_declaring(60000, 60000));
         return fs::file_size(path) == 68u;
     }
+    // Within the pixel cap, but no 68-byte file holds 144 M pixels: it cost 1.9 GB before its
+    // first row failed (the report's case; fuzz_texture found a 1,121-byte JPEG declaring
+    // 16000 x 16000 at 4.1 GB).
+    if (kind == "header past its file") {
+        write_text_file(path, png_declaring(12000, 12000));
+        return fs::file_size(path) == 68u;
+    }
     if (kind == "FIFO") return ::mkfifo(path.c_str(), 0600) == 0;
     if (kind == "/dev/zero") {
         fs::create_symlink("/dev/zero", path);
@@ -85,12 +92,16 @@ std::string reason(const std::string& kind) {
     // stb_image (the small codec) refuses such a header itself, as an unknown image type.
     if (kind == "huge header")
         return std::string(kdray::image_codec_name()) == "oiio" ? "60000 x 60000 pixels" : "";
+    if (kind == "header past its file")
+        return "12000 x 12000 pixels, 3 channels in a file of 68 bytes, more than the 16384 pixels "
+               "a byte";
     if (kind == "FIFO") return "not a regular file (a FIFO)";
     if (kind == "/dev/zero") return "not a regular file (a character device)";
     return "bytes kdray reads of one image file";
 }
 
-const std::vector<std::string> kKinds = {"huge header", "FIFO", "/dev/zero", "sparse"};
+const std::vector<std::string> kKinds = {"huge header", "header past its file", "FIFO", "/dev/zero",
+                                         "sparse"};
 
 }  // namespace
 

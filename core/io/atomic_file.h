@@ -16,8 +16,9 @@ namespace kdray {
 /// one: dir/frame.png -> dir/.frame.png.kdray.tmp@node7@123@0f3a...9c.png.
 std::filesystem::path temporary_path(const std::filesystem::path& path);
 
-/// Calls `write` with the temporary name of `path`; `write` creates and fills that file and
-/// throws Error when it cannot. Then the file is renamed onto `path`. On any failure the
+/// Calls `write` with the temporary name of `path`; the file is there, empty and locked (see
+/// remove_stale_temporaries), and `write` opens it by name, fills it (truncating, never replacing
+/// it) and throws Error when it cannot. Then the file is renamed onto `path`. On any failure the
 /// temporary file is removed and the Error propagates. A `path` that exists and is not a regular
 /// file (a device node, a FIFO, a directory, a symbolic link) is refused before anything is
 /// written. Names too long for the temporary suffix get a shorter, hashed temporary name.
@@ -47,8 +48,12 @@ struct FileContent {
 void write_files_atomically(const std::vector<FileContent>& files);
 
 /// Removes the temporary files that a kdray process killed mid-write (SIGKILL, a power cut) left
-/// in `dir`: regular files named as temporary_path names them, made on this host, whose process
-/// no longer runs. Nothing else: not a user's `.notes.tmp123`, not another host's temporaries.
+/// in `dir`: regular files named as temporary_path names them, made on this host, that no process
+/// holds locked. Every temporary is locked (flock) by its writer from its creation to its rename:
+/// a lock holds across PID namespaces, where the process id in the name means nothing, and goes
+/// when its holder dies. Nothing else: not a user's `.notes.tmp123`, not another host's
+/// temporaries (a lock on a shared folder may be one only its node sees), and nothing on a file
+/// system without locks.
 void remove_stale_temporaries(const std::filesystem::path& dir);
 
 }  // namespace kdray

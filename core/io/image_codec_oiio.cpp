@@ -61,7 +61,7 @@ struct OpenedImage {
                 throw Error("cannot read " + name + ": " + (why.empty() ? OIIO::geterror() : why));
         }
         const OIIO::ImageSpec& spec = in->spec();
-        check_image_size(name, spec.width, spec.height, spec.nchannels);
+        check_image_size(name, spec.width, spec.height, spec.nchannels, bytes.size());
     }
 };
 

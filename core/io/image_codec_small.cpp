@@ -68,7 +68,8 @@ ExrImage decode_exr(const std::string& name, const std::string& bytes) {
     if (exr.header.tiled) fail("a tiled EXR file (kdray reads scanline files)");
     const EXRBox2i& window = exr.header.data_window;
     check_image_size(name, std::int64_t(window.max_x) - window.min_x + 1,
-                     std::int64_t(window.max_y) - window.min_y + 1, exr.header.num_channels);
+                     std::int64_t(window.max_y) - window.min_y + 1, exr.header.num_channels,
+                     bytes.size());
     for (int c = 0; c < exr.header.num_channels; ++c)
         if (exr.header.pixel_types[c] == TINYEXR_PIXELTYPE_HALF)
             exr.header.requested_pixel_types[c] = TINYEXR_PIXELTYPE_FLOAT;
@@ -205,7 +206,7 @@ DecodedImage read_image(const std::filesystem::path& path) {
     if (!stbi_info_from_memory(in, length, &width, &height, &channels))
         throw Error("cannot read " + name + ": " +
                     (stbi_failure_reason() ? stbi_failure_reason() : "stb_image failed"));
-    check_image_size(name, width, height, channels);
+    check_image_size(name, width, height, channels, bytes.size());
     // stbi_loadf would apply a gamma to 8-bit data: integer images are read as integers and
     // normalised here, float (Radiance HDR) images as floats.
     std::unique_ptr<void, void (*)(void*)> data(nullptr, stbi_image_free);

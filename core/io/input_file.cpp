@@ -95,7 +95,7 @@ std::string read_input_file(const std::filesystem::path& path, std::string_view 
 }
 
 void check_image_size(const std::string& name, std::int64_t width, std::int64_t height,
-                      std::int64_t channels) {
+                      std::int64_t channels, std::uint64_t file_bytes) {
     const std::string size = std::to_string(width) + " x " + std::to_string(height) + " pixels, " +
                              std::to_string(channels) + " channels";
     if (width <= 0 || height <= 0 || channels <= 0)
@@ -107,6 +107,10 @@ void check_image_size(const std::string& name, std::int64_t width, std::int64_t 
     if (huge || pixels > kMaxImagePixels)
         throw Error(name + ": an image of " + size + ", more than the " +
                     std::to_string(kMaxImagePixels) + " pixels kdray decodes of one image");
+    if (pixels > kPlausibleImagePixels && pixels / kMaxPixelsPerFileByte >= file_bytes)
+        throw Error(name + ": an image of " + size + " in a file of " + std::to_string(file_bytes) +
+                    " bytes, more than the " + std::to_string(kMaxPixelsPerFileByte) +
+                    " pixels a byte any image format packs; the file is damaged");
     const std::uint64_t bytes = std::uint64_t(channels) > kMaxImagePixels
                                     ? std::numeric_limits<std::uint64_t>::max()
                                     : pixels * std::uint64_t(channels) * 4;

@@ -36,12 +36,22 @@ std::string read_input_file(const std::filesystem::path& path, std::string_view 
 /// cost 58 GB ("out of host memory", naming no file).
 inline constexpr std::uint64_t kMaxImagePixels = std::uint64_t(1) << 28;
 
+/// An image file's bytes bound the pixels it can hold: deflate (PNG, TIFF, EXR's ZIP) packs at
+/// most 1032 bytes into one, 8 pixels a byte at 1 bit a pixel; JPEG needs bits for every 8 x 8
+/// block; GIF's codes grow a pixel at a time. A header declaring more is damaged or hostile: a
+/// 1,121-byte JPEG declaring 16000 x 16000 cost 4.1 GB before its first scanline failed (found by
+/// fuzz_texture). Images of up to kPlausibleImagePixels pass whatever their size.
+inline constexpr std::uint64_t kMaxPixelsPerFileByte = 16384;
+inline constexpr std::uint64_t kPlausibleImagePixels = std::uint64_t(1) << 22;
+
 /// Throws Error "NAME: an image of W x H pixels and C channels, more than ..." unless the image
 /// declares at most kMaxImagePixels pixels and its decoded floats (4 bytes a channel) fit in
 /// input_size_limit(); "NAME: an empty image (W x H, C channels)" when a dimension is not
-/// positive. Called with the header's figures, before anything is decoded.
+/// positive; "NAME: ... in a file of B bytes, more than ..." when it declares more than
+/// kPlausibleImagePixels pixels and more than kMaxPixelsPerFileByte a byte of its file
+/// (`file_bytes`). Called with the header's figures, before anything is decoded.
 void check_image_size(const std::string& name, std::int64_t width, std::int64_t height,
-                      std::int64_t channels);
+                      std::int64_t channels, std::uint64_t file_bytes);
 
 /// The deepest nesting of arrays and objects kdray parses: kdray's own files nest 5 deep, and
 /// every consumer of a parsed value (dump(), destruction, a message quoting it) recurses once a

@@ -52,6 +52,13 @@ void check_names(const nlohmann::json& record, const std::string& where) {
             throw Error(where + "." + key + " is " + excerpt(record[key]) + ", not a file name");
 }
 
+/// A frame's time as kdray writes it: a number of milliseconds, >= 0, and at most 10^12 (31
+/// years), so that the summary's sums over every record a stats.json can hold stay finite: two
+/// records of 1e308 ms summed to inf, which `kdray stats` printed and JSON writes as null.
+bool is_time_ms(const nlohmann::json& value) {
+    return value.is_number() && value.get<double>() >= 0.0 && value.get<double>() <= 1e12;
+}
+
 /// What a record is of: its image's file name (a record per image in the folder), or, for a
 /// failure recorded before failures named their image, its frame and input.
 std::string record_key(const nlohmann::json& record) {
@@ -94,8 +101,9 @@ nlohmann::json read_render_stats(const std::filesystem::path& file) {
             throw Error(where + ".frame is " + excerpt(frame["frame"]) + ", not a frame number");
         for (const char* key : {"frame_ms", "load_ms", "load_wait_ms", "compile_ms", "build_ms",
                                 "trace_ms", "write_ms", "other_ms"})
-            if (frame.contains(key) && !frame[key].is_number())
-                throw Error(where + "." + key + " is " + excerpt(frame[key]) + ", not a number");
+            if (frame.contains(key) && !is_time_ms(frame[key]))
+                throw Error(where + "." + key + " is " + excerpt(frame[key]) +
+                            ", not a time in milliseconds (a number from 0 to 1e12)");
         if (frame.contains("run") && !frame["run"].is_number_unsigned())
             throw Error(where + ".run is " + excerpt(frame["run"]) + ", not a run index");
         check_names(frame, where);
