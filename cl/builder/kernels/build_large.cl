@@ -425,6 +425,50 @@ __kernel void kd_emit_large_children(KdLargeLevelArgs a, __global const KdLargeN
     records[self] = kd_build_inner(axis, split, child_id[0], child_id[1]);
 }
 
+/* Where node i's children take chunk c's references (both distribute kernels): per side, the
+ * index of the chunk's first reference there (the child's first reference, in the next level or
+ * in the small roots' list, plus the chunk's rank within the node), whether the child stays large,
+ * and its small root otherwise. */
+KDRAY_INLINE void kd_child_targets(KdLargeLevelArgs a, uint i, uint c,
+                                   __global const uint* chunk_rank,
+                                   __global const uint* slot_rank, uint* dst, uint* large,
+                                   uint* root) {
+    const uint slots = 2 * a.nodes;
+    for (uint side = 0; side < 2; ++side) {
+        const uint s = 2 * i + side;
+        large[side] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s);
+        const uint within = chunk_rank[side * a.chunks + c];
+        dst[side] = within + (large[side]
+                                  ? kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s)
+                                  : a.small_ref_base +
+                                        kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s));
+        root[side] = a.small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
+    }
+}
+
+/* Reference r (triangle tri, KDRAY_BELOW/ABOVE/CLIPPED `sides`) to its child on `side` at index
+ * `at`: its box (the clipped one when it straddled) to the next level or to the child's small
+ * root, and into sent[side], the union of what the chunk sends there. */
+KDRAY_INLINE void kd_send_reference(uint r, uint refs, uint tri, uint sides, uint side, uint at,
+                                    uint large, uint root, __global const float* ref_box,
+                                    __global const float* child_box, __global uint* next_ref_tri,
+                                    __global float* next_ref_box, __global uint* small_ref_tri,
+                                    __global float* small_ref_box,
+                                    __global uint* small_ref_root, KdBox* sent) {
+    const KdBox b = kd_load_box(sides & KDRAY_CLIPPED ? child_box : ref_box,
+                                sides & KDRAY_CLIPPED ? (size_t)side * refs + r : r);
+    sent[side].lo = fmin(sent[side].lo, b.lo);
+    sent[side].hi = fmax(sent[side].hi, b.hi);
+    if (large) {
+        next_ref_tri[at] = tri;
+        kd_store_box(next_ref_box, at, b);
+    } else {
+        small_ref_tri[at] = tri;
+        kd_store_box(small_ref_box, at, b);
+        small_ref_root[at] = root;
+    }
+}
+
 /* Move chunk c's references to their children (with the box kd_classify_chunks clipped to each
  * child of a straddling one), to the next level, to its small root's list, or to the leaf store,
  * in reference order: a reference's rank in its child is the chunk's scanned count plus those
@@ -442,7 +486,6 @@ __kernel void kd_distribute_chunks(
     __global uint* leaf_refs, __global float* side_box) {
     const uint c = get_global_id(0);
     const uint chunks = a.chunks, refs = a.refs, nodes = a.nodes;
-    const uint small_root_base = a.small_root_base, small_ref_base = a.small_ref_base;
     if (c >= chunks) return;
     const uint slots = 2 * nodes;
     const uint i = kd_find_segment(node_chunk, nodes, c);
@@ -460,37 +503,15 @@ __kernel void kd_distribute_chunks(
         kd_store_box(side_box, chunks + c, sent[1]);
         return;
     }
-    /* Per child: where its references go (the next level's large node or a small root's list)
-     * and how many of the node's references for it come before this chunk. */
     uint dst[2], large[2], root[2];
-    for (uint side = 0; side < 2; ++side) {
-        const uint s = 2 * i + side;
-        large[side] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s);
-        const uint within = chunk_rank[side * chunks + c];
-        dst[side] = within + (large[side]
-                                  ? kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s)
-                                  : small_ref_base +
-                                        kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s));
-        root[side] = small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
-    }
+    kd_child_targets(a, i, c, chunk_rank, slot_rank, dst, large, root);
     for (uint r = begin; r < end; ++r) {
         const uint sides = ref_sides[r], tri = ref_tri[r];
-        for (uint side = 0; side < 2; ++side) {
-            if (!(sides & (side == 0 ? KDRAY_BELOW : KDRAY_ABOVE))) continue;
-            const KdBox b = kd_load_box(sides & KDRAY_CLIPPED ? child_box : ref_box,
-                                        sides & KDRAY_CLIPPED ? (size_t)side * refs + r : r);
-            const uint at = dst[side]++;
-            sent[side].lo = fmin(sent[side].lo, b.lo);
-            sent[side].hi = fmax(sent[side].hi, b.hi);
-            if (large[side]) {
-                next_ref_tri[at] = tri;
-                kd_store_box(next_ref_box, at, b);
-            } else {
-                small_ref_tri[at] = tri;
-                kd_store_box(small_ref_box, at, b);
-                small_ref_root[at] = root[side];
-            }
-        }
+        for (uint side = 0; side < 2; ++side)
+            if (sides & (side == 0 ? KDRAY_BELOW : KDRAY_ABOVE))
+                kd_send_reference(r, refs, tri, sides, side, dst[side]++, large[side], root[side],
+                                  ref_box, child_box, next_ref_tri, next_ref_box, small_ref_tri,
+                                  small_ref_box, small_ref_root, sent);
     }
     kd_store_box(side_box, c, sent[0]);
     kd_store_box(side_box, chunks + c, sent[1]);

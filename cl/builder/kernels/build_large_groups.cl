@@ -233,16 +233,7 @@ __kernel void kd_distribute_chunk_groups(
     for (uint k = l; k < 2 * KDRAY_BOX_FLOATS; k += g)
         sent_key[k] = kd_ordered_key(k % KDRAY_BOX_FLOATS < 3 ? INFINITY : -INFINITY);
     uint dst[2], large[2], root[2];
-    for (uint side = 0; side < 2; ++side) {
-        const uint s = 2 * i + side;
-        large[side] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s);
-        const uint within = chunk_rank[side * chunks + c];
-        dst[side] = within + (large[side]
-                                  ? kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s)
-                                  : a.small_ref_base +
-                                        kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s));
-        root[side] = a.small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
-    }
+    kd_child_targets(a, i, c, chunk_rank, slot_rank, dst, large, root);
     for (uint round = begin; round < end; round += g) {
         const uint r = round + l;
         const uint sides = r < end ? ref_sides[r] : 0u;
@@ -252,22 +243,13 @@ __kernel void kd_distribute_chunk_groups(
         const uint before = kd_group_exclusive_scan(flags, scratch, &total);
         if (r < end) {
             const uint tri = ref_tri[r];
-            for (uint side = 0; side < 2; ++side) {
-                if (!(sides & (side == 0 ? KDRAY_BELOW : KDRAY_ABOVE))) continue;
-                const KdBox b = kd_load_box(sides & KDRAY_CLIPPED ? child_box : ref_box,
-                                            sides & KDRAY_CLIPPED ? (size_t)side * refs + r : r);
-                const uint at = dst[side] + (side == 0 ? before & 0xFFFFu : before >> 16);
-                sent[side].lo = fmin(sent[side].lo, b.lo);
-                sent[side].hi = fmax(sent[side].hi, b.hi);
-                if (large[side]) {
-                    next_ref_tri[at] = tri;
-                    kd_store_box(next_ref_box, at, b);
-                } else {
-                    small_ref_tri[at] = tri;
-                    kd_store_box(small_ref_box, at, b);
-                    small_ref_root[at] = root[side];
-                }
-            }
+            for (uint side = 0; side < 2; ++side)
+                if (sides & (side == 0 ? KDRAY_BELOW : KDRAY_ABOVE))
+                    kd_send_reference(r, refs, tri, sides, side,
+                                      dst[side] + (side == 0 ? before & 0xFFFFu : before >> 16),
+                                      large[side], root[side], ref_box, child_box, next_ref_tri,
+                                      next_ref_box, small_ref_tri, small_ref_box, small_ref_root,
+                                      sent);
         }
         dst[0] += total & 0xFFFFu;
         dst[1] += total >> 16;
