@@ -59,6 +59,35 @@ KDRAY_INLINE kd_u32 kd_pick_emitter(KDRAY_GLOBAL const KdEmitter* emitters, kd_u
     return lo;
 }
 
+/* What a light sample sees of emitter triangle `tri` from p: the point at the square-root warp of
+ * (u1, u2) (pbrt's uniform point on a triangle) and the shadow ray toward it, from ng's side of p
+ * (as kd_shadow_ray starts it, so that the ray stops short of the emitter by ray_epsilon, whatever
+ * the angle to it): shadow->org, the unit direction to_light, the squared distance d2 and the
+ * distance to the point, the emitter's cosine toward p and twice its area. Returns 0 when the
+ * point is p itself or p sees the emitter's back. Whitted's light sample and the path
+ * integrator's (kd_path.h) both take their point here. */
+KDRAY_HOT_INLINE int kd_emitter_point(KDRAY_GLOBAL const kd_f32* tri, const kd_f32* p,
+                                      const kd_f32* ng, kd_f32 ray_epsilon, kd_f32 u1, kd_f32 u2,
+                                      KdRay* shadow, kd_f32* to_light, kd_f32* d2,
+                                      kd_f32* distance, kd_f32* cos_light, kd_f32* twice_area) {
+    const kd_f32 su = KDRAY_SQRT(u1);
+    const kd_f32 b1 = su * (1.0f - u2), b2 = su * u2, b0 = 1.0f - su;
+    for (int a = 0; a < 3; ++a) {
+        shadow->org[a] = p[a] + ng[a] * ray_epsilon;
+        to_light[a] = b0 * tri[a] + b1 * tri[3 + a] + b2 * tri[6 + a] - shadow->org[a];
+    }
+    *d2 = kd_dot3(to_light, to_light);
+    if (!(*d2 > 0.0f)) return 0;
+    *distance = KDRAY_SQRT(*d2);
+    kd_set3(to_light, to_light[0] / *distance, to_light[1] / *distance, to_light[2] / *distance);
+    kd_f32 wn[3];
+    kd_winding_normal(tri, wn);
+    *twice_area = KDRAY_SQRT(kd_dot3(wn, wn));
+    /* Its front faces p when the winding normal opposes the direction from p to it. */
+    *cos_light = -kd_dot3(wn, to_light) / *twice_area;
+    return *cos_light > 0.0f;
+}
+
 /* One sample of the light of the frame's emitters at p (geometric normal ng, facing the viewer;
  * shading normal ns) for the eye direction `dir`, reflected by m with the diffuse colour
  * `diffuse` (kd_reflected, the BRDF times
@@ -72,27 +101,11 @@ KDRAY_HOT_INLINE void kd_area_light(const KdSceneView* scene, const KdView* view
         scene->emitters + kd_pick_emitter(scene->emitters, view->emitter_count, kd_unit_float(h0));
     KDRAY_GLOBAL const kd_f32* tri =
         scene->triangles + (size_t)e->triangle * KDRAY_FLOATS_PER_TRIANGLE;
-    /* A uniform point on the triangle (pbrt's square-root warp of two uniform numbers). */
-    const kd_f32 su = KDRAY_SQRT(kd_unit_float(h1)), v = kd_unit_float(h2);
-    const kd_f32 b1 = su * (1.0f - v), b2 = su * v, b0 = 1.0f - su;
-    /* From where the shadow ray leaves (ng's side of p, as kd_shadow_ray starts it), so that the
-     * ray stops short of the emitter by ray_epsilon, whatever the angle to it. */
     KdRay shadow;
-    kd_f32 to_light[3];
-    for (int a = 0; a < 3; ++a) {
-        shadow.org[a] = p[a] + ng[a] * view->ray_epsilon;
-        to_light[a] = b0 * tri[a] + b1 * tri[3 + a] + b2 * tri[6 + a] - shadow.org[a];
-    }
-    const kd_f32 d2 = kd_dot3(to_light, to_light);
-    if (!(d2 > 0.0f)) return;
-    const kd_f32 distance = KDRAY_SQRT(d2);
-    kd_set3(to_light, to_light[0] / distance, to_light[1] / distance, to_light[2] / distance);
-    kd_f32 wn[3];
-    kd_winding_normal(tri, wn);
-    const kd_f32 twice_area = KDRAY_SQRT(kd_dot3(wn, wn));
-    /* Its front faces p when the winding normal opposes the direction from p to it. */
-    const kd_f32 cos_light = -kd_dot3(wn, to_light) / twice_area;
-    if (!(cos_light > 0.0f)) return;
+    kd_f32 to_light[3], d2, distance, cos_light, twice_area;
+    if (!kd_emitter_point(tri, p, ng, view->ray_epsilon, kd_unit_float(h1), kd_unit_float(h2),
+                          &shadow, to_light, &d2, &distance, &cos_light, &twice_area))
+        return;
     const kd_f32 cos_l = kd_light_cosine(ng, ns, to_light);
     if (cos_l <= 0.0f) return;
     rays->area_shadow += 1u;

@@ -197,23 +197,11 @@ KDRAY_HOT_INLINE void kd_path_area_light(const KdSceneView* scene, const KdView*
         scene->emitters + kd_pick_emitter(scene->emitters, view->emitter_count, u0);
     KDRAY_GLOBAL const kd_f32* tri =
         scene->triangles + (size_t)e->triangle * KDRAY_FLOATS_PER_TRIANGLE;
-    const kd_f32 su = KDRAY_SQRT(u1);
-    const kd_f32 b1 = su * (1.0f - u2), b2 = su * u2, b0 = 1.0f - su;
     KdRay shadow;
-    kd_f32 to_light[3];
-    for (int a = 0; a < 3; ++a) {
-        shadow.org[a] = p[a] + ng[a] * view->ray_epsilon;
-        to_light[a] = b0 * tri[a] + b1 * tri[3 + a] + b2 * tri[6 + a] - shadow.org[a];
-    }
-    const kd_f32 d2 = kd_dot3(to_light, to_light);
-    if (!(d2 > 0.0f)) return;
-    const kd_f32 distance = KDRAY_SQRT(d2);
-    kd_set3(to_light, to_light[0] / distance, to_light[1] / distance, to_light[2] / distance);
-    kd_f32 wn[3];
-    kd_winding_normal(tri, wn);
-    const kd_f32 twice_area = KDRAY_SQRT(kd_dot3(wn, wn));
-    const kd_f32 cos_light = -kd_dot3(wn, to_light) / twice_area;
-    if (!(cos_light > 0.0f)) return;
+    kd_f32 to_light[3], d2, distance, cos_light, twice_area;
+    if (!kd_emitter_point(tri, p, ng, view->ray_epsilon, u1, u2, &shadow, to_light, &d2,
+                          &distance, &cos_light, &twice_area))
+        return;
     const kd_f32 cos_l = kd_light_cosine(ng, ns, to_light);
     if (cos_l <= 0.0f) return;
     kd_f32 f_cos[3];
