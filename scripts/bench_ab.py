@@ -21,7 +21,8 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import ROOT, SHARED, git_commit, machine_description, run_json  # noqa: E402
+from bench_common import (ROOT, SHARED, git_commit, machine_description, run_json,  # noqa: E402
+                          write_markdown)
 
 BUILD_SCENES = ["bart-kitchen/frame_000.obj", "dragon/dragon_res2.obj", "sponza-dabrovic/sponza.obj",
                 "bunny/bunny.obj"]
@@ -109,9 +110,7 @@ def main():
     for row in rows:
         lines.append(f"| {row['what']} | {row['base_ms']:.1f} | {row['head_ms']:.1f} | "
                      f"{row['head_over_base']:.3f} |")
-    with open(args.out + ".md", "w") as f:
-        f.write("\n".join(lines) + "\n")
-    print("\n".join(lines))
+    write_markdown(args.out, lines)
     return 0
 
 

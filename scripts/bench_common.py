@@ -106,6 +106,13 @@ def median(values):
     return statistics.median(values) if values else float("nan")
 
 
+def write_markdown(out, lines):
+    """Writes OUT.md (the Markdown lines, one file a benchmark's figures go with) and prints it."""
+    with open(out + ".md", "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
 def write_report(out, lines, rows):
     """Writes OUT.md (the Markdown lines) and OUT.csv (the rows), and prints the Markdown."""
     os.makedirs(os.path.dirname(out), exist_ok=True)

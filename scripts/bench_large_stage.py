@@ -16,7 +16,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import ROOT, SHARED, median, run_json, run_record, write_json  # noqa: E402
+from bench_common import (ROOT, SHARED, median, run_json, run_record, write_json,  # noqa: E402
+                          write_markdown)
 
 SCENES = ["bart-kitchen/frame_000.obj", "dragon/dragon_res2.obj", "sponza-dabrovic/sponza.obj",
           "bunny/bunny.obj"]
@@ -91,9 +92,7 @@ def main():
         "GPUs. GPU figures come from the device bundle (scripts/device-check.sh) when a GPU is "
         "lent.",
     ]
-    with open(args.out + ".md", "w") as f:
-        f.write("\n".join(lines) + "\n")
-    print("\n".join(lines))
+    write_markdown(args.out, lines)
     return 0
 
 

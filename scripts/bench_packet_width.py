@@ -23,7 +23,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_common import (ROOT, SHARED, build_peer, median, run_json, run_record,  # noqa: E402
-                          write_json)
+                          write_json, write_markdown)
 from bench_render import THREADS, primary_only  # noqa: E402
 
 SCENE = "bunny/bunny.obj"
@@ -148,9 +148,7 @@ def main():
     lines += ["", f"Packets of 16 over packets of 8, Mrays/s in the same round (median): "
               f"{ratios['lanes16_over_lanes8']:.2f}x. Both widths wrote the same image in every "
               "round."]
-    with open(args.out + ".md", "w") as f:
-        f.write("\n".join(lines) + "\n")
-    print("\n".join(lines))
+    write_markdown(args.out, lines)
     return 0
 
 

@@ -22,7 +22,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from accuracy_vs_time import image_error, kdray_render, link_copies, write_render_file  # noqa
-from bench_common import ROOT, SHARED, run_record, write_json  # noqa: E402
+from bench_common import ROOT, SHARED, run_record, write_json, write_markdown  # noqa: E402
 
 SPPS = [1, 4, 16, 64, 256]
 
@@ -114,9 +114,7 @@ def main():
             reach = f"{s['after_spp']:.1f}" if s["after_spp"] else "-"
             lines.append(f"| {row['scene']} | {b['spp']} | {b['rmse']:.5f} | {a['rmse']:.5f} | "
                          f"{a['rmse'] / b['rmse']:.2f} | {reach} |")
-    with open(args.out + ".md", "w") as f:
-        f.write("\n".join(lines) + "\n")
-    print("\n".join(lines))
+    write_markdown(args.out, lines)
     return 0
 
 
