@@ -25,12 +25,15 @@ from bench_common import ROOT, SHARED, run_record, write_json  # noqa: E402
 
 
 def render(kdray, obj, render_file, out, extra=()):
+    """One `kdray render` into `out`; its frame record and the command as a user types it from
+    the repository root (the output folder shown as out/NAME)."""
     command = [kdray, "render", obj, "--camera", render_file, "-o", out, "-q", *extra]
     subprocess.run(command, check=True, capture_output=True, text=True)
     with open(os.path.join(out, "stats.json")) as f:
         frame = json.load(f)["frames"][0]
-    shown = " ".join(os.path.relpath(a, ROOT) if os.path.isabs(a) else a for a in command[1:])
-    return frame, "kdray " + shown
+    shown = [os.path.relpath(a, ROOT) if os.path.isabs(a) else a for a in command[1:]]
+    shown[shown.index("-o") + 1] = "out/" + os.path.basename(out)
+    return frame, "build/kdray " + " ".join(shown)
 
 
 def mosaic(tiles, path):
