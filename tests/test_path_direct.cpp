@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,47 @@
 #include "tests/support.h"
 
 using namespace kdray;
+
+namespace {
+
+/// The two estimators of direct light these tests compare, over one image and camera with a black
+/// background: Whitted's first generation, and the path integrator at max_depth 2 (the camera ray
+/// and one light sample). The path's background lights the scene as a sky would
+/// (docs/path-tracing.md); black, it adds nothing Whitted's first generation lacks.
+struct DirectLight {
+    RenderSettings whitted, path;
+};
+
+DirectLight direct_light(int width, int height, int spp, const Camera& camera) {
+    DirectLight d;
+    d.whitted.width = width;
+    d.whitted.height = height;
+    d.whitted.spp = spp;
+    d.whitted.max_depth = 1;
+    d.whitted.background = {0, 0, 0};
+    d.whitted.camera_keys = {CameraKey{0, SceneCamera(camera)}};
+    d.whitted.camera_given = true;
+    d.path = d.whitted;
+    d.path.integrator = Integrator::path;
+    d.path.max_depth = 2;
+    return d;
+}
+
+/// The floor (4 x 4 at y = 0, material `floor`) under a lamp facing down 1.2 above it (its
+/// winding normal -y), in dir/scene.obj with `mtl` as dir/m.mtl; the lamp's corners in `lamp`.
+Scene floor_under_lamp(const std::filesystem::path& dir, const std::string& mtl) {
+    test::write_text_file(dir / "m.mtl", mtl);
+    test::write_text_file(dir / "scene.obj",
+                          "mtllib m.mtl\nv -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\n"
+                          "v -0.4 1.2 -0.6\nv 0.4 1.2 -0.6\nv 0.4 1.2 0.2\nv -0.4 1.2 0.2\n"
+                          "usemtl floor\nf 1 3 2\nf 1 4 3\nusemtl lamp\nf 5 6 7\nf 5 7 8\n");
+    return load_obj(dir / "scene.obj");
+}
+
+/// Looking down at the floor past the lamp, so that the lamp's mirror image lights a highlight.
+const Camera kFloorCamera{{0.0f, 1.0f, 2.2f}, {0, 0, -0.3f}, {0, 1, 0}, 60.0f};
+
+}  // namespace
 
 TEST_CASE("path: at max_depth 2 a scene under point lights is Whitted's direct light") {
     // Two segments are the camera ray and a light sample: with only delta lights (nothing emits)
@@ -34,22 +76,11 @@ TEST_CASE("path: at max_depth 2 a scene under point lights is Whitted's direct l
                           "usemtl matte\nf 1 3 2\nf 1 4 3\nusemtl shiny\nf 5 6 7\n");
     const Scene scene = load_obj(dir / "scene.obj");
     const KdTree tree = build_reference(scene);
-    RenderSettings whitted;
-    whitted.width = 48;
-    whitted.height = 36;
-    whitted.spp = 2;
-    whitted.max_depth = 1;
-    // The path's background lights the scene as a sky would (docs/path-tracing.md): black here,
-    // where Whitted's first generation sees no sky.
-    whitted.background = {0, 0, 0};
-    whitted.lights = {Light{Light::Type::point, {1, 2, 1}, {}, {5, 5, 5}},
-                      Light{Light::Type::directional, {}, {-1, -2, -0.5}, {0.5, 0.4, 0.3}}};
-    whitted.camera_keys = {
-        CameraKey{0, SceneCamera(Camera{{0.5f, 2.0f, 3.0f}, {0, 0.2f, 0}, {0, 1, 0}, 50.0f})}};
-    whitted.camera_given = true;
-    RenderSettings path = whitted;
-    path.integrator = Integrator::path;
-    path.max_depth = 2;
+    auto [whitted, path] =
+        direct_light(48, 36, 2, Camera{{0.5f, 2.0f, 3.0f}, {0, 0.2f, 0}, {0, 1, 0}, 50.0f});
+    whitted.lights = path.lights = {
+        Light{Light::Type::point, {1, 2, 1}, {}, {5, 5, 5}},
+        Light{Light::Type::directional, {}, {-1, -2, -0.5}, {0.5, 0.4, 0.3}}};
     const Camera camera = whitted.camera_at(0, scene.frame);
     const FrameResult a =
         render_reference(tree, scene, prepare_render(scene, whitted, camera, 3), 2);
@@ -73,32 +104,14 @@ TEST_CASE("path: direct light from an emitter on a glossy floor is Whitted's lig
     // they draw with (the half vector's 1 / (4 wi.h), the cosine's 1 / pi) biases the second
     // only, most in the highlight.
     const auto dir = test::fresh_temp_dir("path_gloss");
-    test::write_text_file(dir / "m.mtl",
-                          "newmtl floor\nKd 0.2 0.25 0.3\nKs 0.6 0.5 0.4\nNs 30\nillum 2\n"
-                          "newmtl lamp\nKd 0 0 0\nKe 6 5 4\n");
-    // The lamp faces down (its winding normal -y), 1.2 above the floor.
-    test::write_text_file(dir / "scene.obj",
-                          "mtllib m.mtl\nv -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\n"
-                          "v -0.4 1.2 -0.6\nv 0.4 1.2 -0.6\nv 0.4 1.2 0.2\nv -0.4 1.2 0.2\n"
-                          "usemtl floor\nf 1 3 2\nf 1 4 3\nusemtl lamp\nf 5 6 7\nf 5 7 8\n");
-    const Scene scene = load_obj(dir / "scene.obj");
+    const Scene scene = floor_under_lamp(
+        dir, "newmtl floor\nKd 0.2 0.25 0.3\nKs 0.6 0.5 0.4\nNs 30\nillum 2\n"
+             "newmtl lamp\nKd 0 0 0\nKe 6 5 4\n");
     const KdTree tree = build_reference(scene);
-    RenderSettings whitted;
-    whitted.width = 32;
-    whitted.height = 24;
-    whitted.spp = 512;
-    whitted.max_depth = 1;
-    whitted.background = {0, 0, 0};
+    auto [whitted, path] = direct_light(32, 24, 512, kFloorCamera);
     // The 2% bound below was sized from independent samples' spread (Whitted's light samples are
     // hashes of the shading point under either sampler): both sides draw independent samples.
-    whitted.independent_samples = true;
-    // Looking down at the floor past the lamp, so that the lamp's mirror image lights a highlight.
-    whitted.camera_keys = {
-        CameraKey{0, SceneCamera(Camera{{0.0f, 1.0f, 2.2f}, {0, 0, -0.3f}, {0, 1, 0}, 60.0f})}};
-    whitted.camera_given = true;
-    RenderSettings path = whitted;
-    path.integrator = Integrator::path;
-    path.max_depth = 2;
+    whitted.independent_samples = path.independent_samples = true;
     const Camera camera = whitted.camera_at(0, scene.frame);
     const FrameResult a =
         render_reference(tree, scene, prepare_render(scene, whitted, camera, 5), 2);
@@ -149,28 +162,13 @@ TEST_CASE("path: a Lambertian floor under a square lamp has the polygon's closed
     // each floor pixel's radiance is Kd / pi times that, for Whitted's light sampling and for the
     // path integrator's MIS at max_depth 2 alike.
     const auto dir = test::fresh_temp_dir("path_lamp");
-    test::write_text_file(
-        dir / "m.mtl", "newmtl floor\nKd 0.6 0.5 0.4\nillum 1\nnewmtl lamp\nKd 0 0 0\nKe 6 5 4\n");
     const Vec3 lamp[4] = {
         {-0.4f, 1.2f, -0.6f}, {0.4f, 1.2f, -0.6f}, {0.4f, 1.2f, 0.2f}, {-0.4f, 1.2f, 0.2f}};
-    test::write_text_file(dir / "scene.obj",
-                          "mtllib m.mtl\nv -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\n"
-                          "v -0.4 1.2 -0.6\nv 0.4 1.2 -0.6\nv 0.4 1.2 0.2\nv -0.4 1.2 0.2\n"
-                          "usemtl floor\nf 1 3 2\nf 1 4 3\nusemtl lamp\nf 5 6 7\nf 5 7 8\n");
-    const Scene scene = load_obj(dir / "scene.obj");
+    const Scene scene = floor_under_lamp(
+        dir, "newmtl floor\nKd 0.6 0.5 0.4\nillum 1\nnewmtl lamp\nKd 0 0 0\nKe 6 5 4\n");
     const KdTree tree = build_reference(scene);
-    RenderSettings whitted;
-    whitted.width = 128;
-    whitted.height = 96;
-    whitted.spp = 1;  // the centre ray: the hit, and so the closed form, is the pixel's
-    whitted.max_depth = 1;
-    whitted.background = {0, 0, 0};
-    whitted.camera_keys = {
-        CameraKey{0, SceneCamera(Camera{{0.0f, 1.0f, 2.2f}, {0, 0, -0.3f}, {0, 1, 0}, 60.0f})}};
-    whitted.camera_given = true;
-    RenderSettings path = whitted;
-    path.integrator = Integrator::path;
-    path.max_depth = 2;
+    // One sample, the centre ray: the hit, and so the closed form, is the pixel's.
+    const auto [whitted, path] = direct_light(128, 96, 1, kFloorCamera);
     const Camera camera = whitted.camera_at(0, scene.frame);
     const RenderInputs inputs = prepare_render(scene, whitted, camera, 9);
     auto irradiance_factor = [&](const Vec3& p) {  // E / Le
