@@ -335,6 +335,12 @@ std::string shell_quoted(const std::string& text) {
     return shell_quote(text);
 }
 
+const char* const kSmallRender = R"({
+  "image": {"width": 48, "height": 32},
+  "camera": {"position": [0.5, 0.5, 3], "look_at": [0.5, 0.5, 0.5], "up": [0, 1, 0], "fov_y": 50},
+  "lights": [{"type": "point", "position": [0.5, 3, 2], "intensity": [10, 10, 10]}]
+})";
+
 CommandResult run_kdray(const std::vector<std::string>& args, int timeout_s,
                         const std::string& shell_setup) {
     std::filesystem::path dir = fresh_temp_dir("run");

@@ -104,6 +104,10 @@ struct AovAgreement {
 };
 AovAgreement aov_against_brute_force(const HitBuffer& aov, const Scene& scene, const KdView& view);
 
+/// A small render file (48x32, one point light, the camera on a unit-cube scene such as
+/// random_triangles'): for command-line tests that render anything at all.
+extern const char* const kSmallRender;
+
 /// What running the kdray binary gave: exit status, stdout and stderr.
 struct CommandResult {
     int status = -1;

@@ -72,12 +72,6 @@ void check_frame_times(const nlohmann::json& stats) {
     CHECK(s["mean_write_ms"].get<double>() == doctest::Approx(write_ms / n));
 }
 
-const char* kSmallRender = R"({
-  "image": {"width": 48, "height": 32},
-  "camera": {"position": [0.5, 0.5, 3], "look_at": [0.5, 0.5, 0.5], "up": [0, 1, 0], "fov_y": 50},
-  "lights": [{"type": "point", "position": [0.5, 3, 2], "intensity": [10, 10, 10]}]
-})";
-
 }  // namespace
 
 TEST_CASE("natural order puts frame_2 before frame_10") {
@@ -186,52 +180,6 @@ TEST_CASE("--quality: the ladder's parameters, each command's default, options s
     r = run_kdray({"build", obj.string(), "--quality", "ultra"});
     CHECK(r.status == 2);
     CHECK(r.err.find("--quality") != std::string::npos);
-    fs::remove_all(dir);
-}
-
-TEST_CASE(
-    "--small-stage, --large-stage: each stage's shapes build the same tree, say which ran; "
-    "a bad name is refused") {
-    fs::path dir = fresh_temp_dir("cli-small-stage");
-    const fs::path obj = write_obj(dir / "in" / "frame_1.obj", random_triangles(2000, 17));
-    auto build_json = [&](const std::string& stage, const std::string& option = "--small-stage") {
-        const CommandResult r = run_kdray({"build", obj.string(), "--json", option, stage});
-        REQUIRE_MESSAGE(r.status == 0, r.err);
-        return nlohmann::json::parse(r.out);
-    };
-    const nlohmann::json per_root = build_json("per-root"), per_level = build_json("per-level");
-    CHECK(per_root["small_stage"] == "per-root");
-    CHECK(per_root["params"]["small_stage"] == "per-root");
-    CHECK(per_level["small_stage"] == "per-level");
-    CHECK(per_level["nodes"] == per_root["nodes"]);
-    CHECK(per_level["leaves"] == per_root["leaves"]);
-    CHECK(per_level["sah_cost"] == per_root["sah_cost"]);
-    // auto: the chosen shape is recorded, the request beside it.
-    const nlohmann::json automatic = build_json("auto");
-    CHECK(automatic["params"]["small_stage"] == "auto");
-    CHECK((automatic["small_stage"] == "per-root" || automatic["small_stage"] == "per-level"));
-    // A render's stats.json records it per frame.
-    const fs::path render = write_text_file(dir / "render.json", kSmallRender);
-    CommandResult r =
-        run_kdray({"render", obj.string(), "-o", (dir / "out").string(), "--camera",
-                   render.string(), "--tracer", "reference", "-q", "--small-stage", "per-level"});
-    REQUIRE_MESSAGE(r.status == 0, r.err);
-    CHECK(read_json(dir / "out" / "stats.json")["frames"][0]["tree"]["small_stage"] == "per-level");
-    r = run_kdray({"build", obj.string(), "--small-stage", "bogus"});
-    CHECK(r.status == 2);
-    CHECK(r.err.find("--small-stage") != std::string::npos);
-    // The large stage: the same, with its own names.
-    const nlohmann::json chunked = build_json("chunked", "--large-stage");
-    const nlohmann::json level = build_json("level", "--large-stage");
-    CHECK(chunked["large_stage"] == "chunked");
-    CHECK(level["large_stage"] == "level");
-    CHECK(level["params"]["large_stage"] == "level");
-    CHECK(level["nodes"] == chunked["nodes"]);
-    CHECK(level["sah_cost"] == chunked["sah_cost"]);
-    CHECK((automatic["large_stage"] == "chunked" || automatic["large_stage"] == "level"));
-    r = run_kdray({"build", obj.string(), "--large-stage", "depth"});
-    CHECK(r.status == 2);
-    CHECK(r.err.find("--large-stage") != std::string::npos);
     fs::remove_all(dir);
 }
 

@@ -32,7 +32,7 @@ using namespace kdray::test;
 namespace {
 
 const char* kTriangleObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-const char* kSmallRender =
+const char* kTinyRender =
     R"({"image":{"width":16,"height":12},"camera":{"position":[0.3,0.3,3],"look_at":[0.3,0.3,0]}})";
 // Runs that should end at once get 30 s: a hang fails the test instead of stalling CI.
 constexpr int kNoHang = 30;
@@ -50,7 +50,7 @@ CommandResult render(const fs::path& obj, const fs::path& out, const fs::path& c
 
 TEST_CASE("inputs that are not regular files are refused at once, never read or waited on") {
     const fs::path dir = fresh_temp_dir("hostile-inputs");
-    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path camera = write_text_file(dir / "small.json", kTinyRender);
     const fs::path tri = write_text_file(dir / "tri.obj", kTriangleObj);
     const fs::path fifo = dir / "f.obj";
     REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
@@ -107,7 +107,7 @@ TEST_CASE("an output that is a device node, a link or a directory is refused and
     CHECK(read_file(target) == "keep me");
     CHECK(fs::is_character_file("/dev/null"));
     // A folder named like an output (stats.json): said plainly, not "Success".
-    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path camera = write_text_file(dir / "small.json", kTinyRender);
     fs::create_directories(dir / "out" / "stats.json");
     const CommandResult r = render(tri, dir / "out", camera);
     CHECK(r.status == 1);
@@ -219,7 +219,7 @@ TEST_CASE("inputs past their size limit are refused from their size, before any 
     // 256 MiB (input_file.h's callers); an OBJ up to a quarter of the machine's memory, so one
     // of 1 TiB is past it anywhere, and reading it would fail on memory, not on its size.
     const fs::path dir = fresh_temp_dir("hostile-size");
-    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path camera = write_text_file(dir / "small.json", kTinyRender);
     const fs::path tri = write_text_file(dir / "tri.obj", kTriangleObj);
     auto sparse = [&](const fs::path& path, std::uintmax_t bytes) {
         std::ofstream(path).close();
@@ -249,7 +249,7 @@ TEST_CASE("a frame whose AOV cannot be written leaves neither its image nor a re
     // A directory where the AOV goes makes its write fail, as a full disk would, without root.
     // The frame's image must not stay without it, nor replace an earlier run's.
     const fs::path dir = fresh_temp_dir("hostile-aov");
-    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path camera = write_text_file(dir / "small.json", kTinyRender);
     const fs::path a = write_text_file(dir / "in" / "a.obj", kTriangleObj);
     const fs::path b = write_text_file(dir / "in" / "b.obj", kTriangleObj);
     fs::create_directories(dir / "one" / "a.aov.exr");
@@ -290,7 +290,7 @@ TEST_CASE("a face past the triangulation budget: one error line with its line, a
     // (obj_validate.cpp), refused by the pre-scan before tinyobjloader's ear clipping, which
     // would take seconds on it.
     const fs::path dir = fresh_temp_dir("hostile-polygon");
-    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path camera = write_text_file(dir / "small.json", kTinyRender);
     std::string text;
     constexpr int kVertices = 20000;
     for (int k = 0; k < kVertices; ++k) {
@@ -312,7 +312,7 @@ TEST_CASE("a face past the triangulation budget: one error line with its line, a
 
 TEST_CASE("MTL files: values kdray cannot shade are errors with the MTL file and line") {
     const fs::path dir = fresh_temp_dir("hostile-mtl");
-    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path camera = write_text_file(dir / "small.json", kTinyRender);
     struct Case {
         const char* statement;
         const char* problem;
@@ -394,7 +394,7 @@ TEST_CASE("NaN and overflowing build parameters are usage errors, on every comma
 
 TEST_CASE("a stem at the file name limit renders; temporaries of a killed run are cleaned") {
     const fs::path dir = fresh_temp_dir("hostile-names");
-    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path camera = write_text_file(dir / "small.json", kTinyRender);
     // 246 characters + ".png" is a legal name; its temporary name must still fit.
     const std::string stem(246, 's');
     const fs::path obj = write_text_file(dir / (stem + ".obj"), kTriangleObj);
@@ -459,7 +459,7 @@ TEST_CASE("a full disk: the run fails naming the file, and no image is left unde
     // A frame rendered again onto a full disk fails with the earlier run's image as it was.
     fs::remove(mount / "filler");
     const fs::path again = mount / "again";
-    REQUIRE(render(tri, again, write_text_file(dir / "small.json", kSmallRender)).status == 0);
+    REQUIRE(render(tri, again, write_text_file(dir / "small.json", kTinyRender)).status == 0);
     const std::string earlier = read_file(again / "room.png");
     REQUIRE(!earlier.empty());
     write_text_file(mount / "filler", std::string(200 * 1024, 'x'));  // what fits: the disk full
@@ -474,7 +474,7 @@ TEST_CASE("a full disk: the run fails naming the file, and no image is left unde
 
 TEST_CASE("two inputs that would write one file are a usage error naming both, before any frame") {
     const fs::path dir = fresh_temp_dir("hostile-collide");
-    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path camera = write_text_file(dir / "small.json", kTinyRender);
     write_text_file(dir / "A" / "scene.obj", kTriangleObj);
     write_text_file(dir / "B" / "scene.obj", kTriangleObj);
     write_text_file(dir / "x.obj", kTriangleObj);
@@ -518,7 +518,7 @@ TEST_CASE("an interpolated camera without a basis is refused before the first fr
 
 TEST_CASE("a file name that is not UTF-8 renders and gets a stats.json") {
     const fs::path dir = fresh_temp_dir("hostile-utf8");
-    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path camera = write_text_file(dir / "small.json", kTinyRender);
     const fs::path obj = write_text_file(dir / "b\xff.obj", kTriangleObj);
     const CommandResult r = render(obj, dir / "out", camera);
     INFO(r.err);

@@ -25,7 +25,7 @@ namespace {
 constexpr int kNoHang = 60;
 
 const char* kTriangleObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-const char* kSmallRender =
+const char* kTinyRender =
     R"({"image":{"width":16,"height":12},"camera":{"position":[0.3,0.3,2],"look_at":[0.3,0.3,0]}})";
 
 CommandResult render(const fs::path& obj, const fs::path& out, const fs::path& camera,
@@ -61,7 +61,7 @@ TEST_CASE("an AOV that cannot be renamed into place puts the frame's earlier ima
     // the new image was deleted, leaving the frame without an image while stats.json listed it.
     // Now the earlier image is put back, byte for byte, and the error names the AOV.
     const fs::path dir = fresh_temp_dir("round3-publish");
-    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path camera = write_text_file(dir / "small.json", kTinyRender);
     const fs::path obj = write_text_file(dir / "tri.obj", kTriangleObj);
     const fs::path out = dir / "out";
     REQUIRE(render(obj, out, camera, {"--aov"}).status == 0);
@@ -95,7 +95,7 @@ TEST_CASE("an AOV name too long for the folder fails the frame before anything i
     // 256 bytes) does not. The image's rename succeeded and the AOV's failed, which deleted the
     // earlier run's image; the names are now checked before any file is written. Needs no root.
     const fs::path dir = fresh_temp_dir("round3-publish-long");
-    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path camera = write_text_file(dir / "small.json", kTinyRender);
     const std::string stem(248, 'n');
     const fs::path obj = write_text_file(dir / (stem + ".obj"), kTriangleObj);
     const fs::path out = dir / "out";
@@ -115,7 +115,7 @@ TEST_CASE("a stats.json past the stats budget is refused before a run renders, n
     // kMaxStatsBytes (a sparse file: nothing is written) is refused by its size, unread, by a
     // run into the folder and by `kdray stats`.
     const fs::path dir = fresh_temp_dir("round3-stats-budget");
-    const fs::path camera = write_text_file(dir / "small.json", kSmallRender);
+    const fs::path camera = write_text_file(dir / "small.json", kTinyRender);
     const fs::path obj = write_text_file(dir / "tri.obj", kTriangleObj);
     const fs::path out = dir / "out";
     fs::create_directories(out);

@@ -51,12 +51,6 @@ Camera skew_camera(const Scene& scene) {
     return c;
 }
 
-const char* kSmallRender = R"({
-  "image": {"width": 48, "height": 32},
-  "camera": {"position": [0.5, 0.5, 3], "look_at": [0.5, 0.5, 0.5], "up": [0, 1, 0], "fov_y": 50},
-  "lights": [{"type": "point", "position": [0.5, 3, 2], "intensity": [10, 10, 10]}]
-})";
-
 }  // namespace
 
 TEST_CASE("opencl float-float: the forced path is chosen, and only when forced or without fp64") {
@@ -127,7 +121,7 @@ TEST_CASE("opencl float-float: kdray render says which path ran, in its log and 
     const fs::path dir = test::fresh_temp_dir("cli-float-float");
     const Scene scene = test::random_triangles(400, 12);
     const fs::path obj = test::write_obj(dir / "scene.obj", scene);
-    const fs::path render = test::write_text_file(dir / "render.json", kSmallRender);
+    const fs::path render = test::write_text_file(dir / "render.json", test::kSmallRender);
     auto run = [&](const std::string& tracer, const std::string& out) {
         const test::CommandResult r =
             test::run_kdray({"render", obj.string(), "-o", (dir / out).string(), "--camera",
