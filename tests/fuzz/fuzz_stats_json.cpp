@@ -23,6 +23,7 @@
 #include "core/error.h"
 #include "core/run/render_stats.h"
 #include "core/run/stats_json.h"
+#include "tests/fuzz/fuzz_scratch.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -34,22 +35,9 @@ namespace {
     std::abort();
 }
 
-/// A scratch folder of this process's own: libFuzzer's workers run side by side.
+/// This process's scratch folder (fuzz_scratch.h).
 const fs::path& scratch() {
-    // Never destroyed: the atexit handler below reads it after static destructors have run.
-    static const fs::path& dir = *new fs::path([] {
-        const fs::path base =
-            fs::exists("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
-        const fs::path d = base / ("kdray-fuzz-stats-" + std::to_string(::getpid()));
-        fs::create_directories(d);
-        // Gone when libFuzzer ends the run (exit); a crash leaves it, with the input that did.
-        std::atexit([] {
-            std::error_code ignored;
-            fs::remove_all(scratch(), ignored);
-        });
-        return d;
-    }());
-    return dir;
+    return kdray::fuzz::scratch_folder("fuzz-stats");
 }
 
 void write(const fs::path& path, const char* data, std::size_t size) {
