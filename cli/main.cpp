@@ -306,7 +306,7 @@ int main(int argc, char** argv) {
     CompareCommand compare;
     auto* compare_app = app.add_subcommand(
         "compare",
-        "Compare two hit AOVs (conventions.md: both miss, or both hit with |Z_a - Z_b| <= "
+        "Compare two hit AOVs (docs/conventions.md: both miss, or both hit with |Z_a - Z_b| <= "
         "1e-4 max(1, Z_b); B is the reference) or two images; exit 1 when they disagree");
     compare_app->add_option("a", compare.a, "AOV (.aov.exr) or image (PNG, EXR)")->required();
     compare_app->add_option("b", compare.b, "the reference AOV or image")->required();

@@ -7,5 +7,6 @@ peer=()
 [[ -d ../shared/peers/embree ]] && peer=(--peer)  # the Embree peer, for the comparison tests
 scripts/install-deps.sh "${peer[@]}"
 build_dir=${KDRAY_BUILD_DIR:-build}
-cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
+# Tests on: scripts/demo.sh may have configured this folder without them.
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DKDRAY_BUILD_TESTS=ON "$@" >/dev/null
 cmake --build "$build_dir" -j "$(nproc)"

@@ -104,7 +104,7 @@ if [ "$scenes" = 1 ]; then
         "$shared_scenes/cornell-box/render.json" "$s/cornell-box/"
     cp "$root/testdata/cornell/"{room.obj,room.mtl,render.json} "$s/glass-room/"
     # The hard scenes: closed meshes around the camera, centre rays through vertices and along
-    # edges, at 1e5 from the origin (README, robustness): every ray must hit. Beside them the
+    # edges, at 1e5 from the origin (docs/accuracy.md, robustness): every ray must hit. Beside them the
     # sphere 1e9 from the origin (the scene frame) and needles seen along their length (the
     # refined distance).
     python3 - "$root/scripts" "$s/hard" <<'PY'

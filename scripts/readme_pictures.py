@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
-"""The README's pictures of light transport and of the tree, each made by one `kdray render` a
-user can type (the commands are printed and kept in OUT.json):
+"""The README's pictures, each made by `kdray render` commands a user can type (the commands are
+printed and kept in JSON beside them):
 
+0. What scripts/demo.sh renders, with its commands: the bundled glass room and frames 0, 4 and 8
+   of the bundled animation: docs/demo.png, docs/demo.json. Needs only the repository.
 1. CornellBox-Original rendered by the Whitted integrator (its shared render.json: direct light of
    the panel, no indirect light) beside the path integrator
    (scripts/render-files/cornell-box-path.json): docs/cornell-whitted-path.png.
@@ -10,8 +12,8 @@ user can type (the commands are printed and kept in OUT.json):
 
     scripts/readme_pictures.py [--kdray build/kdray] [--out docs]
 
-Needs ../shared (the scenes) and oiiotool (the side-by-side mosaics); without ../shared it says
-so and exits 77.
+The others (kept in docs/readme-pictures.json) need ../shared (the scenes); without it the script
+makes the demo's picture only, says so and exits 77. oiiotool makes the mosaics.
 """
 import argparse
 import json
@@ -27,13 +29,15 @@ from bench_common import ROOT, SHARED, run_record, write_json  # noqa: E402
 def render(kdray, obj, render_file, out, extra=()):
     """One `kdray render` into `out`; its frame record and the command as a user types it from
     the repository root (the output folder shown as out/NAME)."""
-    command = [kdray, "render", obj, "--camera", render_file, "-o", out, "-q", *extra]
+    command = [kdray, "render", obj, "--render-file", render_file, *extra, "-o", out, "-q"]
     subprocess.run(command, check=True, capture_output=True, text=True)
     with open(os.path.join(out, "stats.json")) as f:
-        frame = json.load(f)["frames"][0]
+        frames = json.load(f)["frames"]
+    frame = frames[0] if len(frames) == 1 else frames
     shown = [os.path.relpath(a, ROOT) if os.path.isabs(a) else a for a in command[1:]]
     shown[shown.index("-o") + 1] = "out/" + os.path.basename(out)
-    return frame, "build/kdray " + " ".join(shown)
+    shown = [f"'{a}'" if "*" in a else a for a in shown]
+    return frame, "build/kdray " + " ".join(a for a in shown if a != "-q")
 
 
 def mosaic(tiles, path):
@@ -41,11 +45,48 @@ def mosaic(tiles, path):
                    capture_output=True)
 
 
+def demo_picture(kdray, out_dir):
+    """scripts/demo.sh's two renders (the same commands, run from the repository root) as one
+    picture: the room, then frames 0, 4 and 8 of the animation below it."""
+    with tempfile.TemporaryDirectory(prefix="kdray-demo-") as tmp:
+        cwd = os.getcwd()
+        os.chdir(ROOT)
+        try:
+            room, room_cmd = render(kdray, "testdata/cornell/room.obj",
+                                    "testdata/cornell/render.json", os.path.join(tmp, "cornell"),
+                                    ["--spp", "16"])
+            anim, anim_cmd = render(kdray, "testdata/anim/frame_*.obj",
+                                    "testdata/anim/render.json", os.path.join(tmp, "anim"))
+        finally:
+            os.chdir(cwd)
+        strip = os.path.join(tmp, "strip.png")
+        subprocess.run(["oiiotool", *[os.path.join(tmp, "anim", anim[i]["image"])
+                                      for i in (0, 4, 8)],
+                        "--mosaic", "3x1", "--resize", "960x0", "-o", strip],
+                       check=True, capture_output=True)
+        room_image = os.path.join(tmp, "room.png")
+        subprocess.run(["oiiotool", os.path.join(tmp, "cornell", room["image"]), "--resize",
+                        "960x0", "-o", room_image], check=True, capture_output=True)
+        target = os.path.join(out_dir, "demo.png")
+        # A canvas the room is pasted into at the top and the strip below it (oiiotool's
+        # --paste takes the foreground first).
+        subprocess.run(["oiiotool", room_image, "--create", "960x900", "3", "--paste", "+0+0",
+                        strip, "--swap", "--paste", "+0+720", "-o", target],
+                       check=True, capture_output=True)
+    write_json(os.path.join(out_dir, "demo.json"),
+               {**run_record(kdray), "file": os.path.relpath(target, ROOT),
+                "commands": [room_cmd, anim_cmd],
+                "room_trace_ms": room["trace_ms"],
+                "animation_frame_ms": [f["frame_ms"] for f in anim]})
+    print(os.path.relpath(target, ROOT), "<-", room_cmd, ";", anim_cmd)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--kdray", default=os.path.join(ROOT, "build", "kdray"))
     parser.add_argument("--out", default=os.path.join(ROOT, "docs"))
     args = parser.parse_args()
+    demo_picture(os.path.abspath(args.kdray), args.out)
     scenes = os.path.join(SHARED, "scenes")
     if not os.path.isdir(scenes):
         print(f"readme_pictures: skipped: {scenes} is absent")

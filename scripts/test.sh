@@ -21,7 +21,7 @@ if [[ "${1:-}" == "--sanitize" ]]; then
     # -O1 -g1: line tables for the reports, at a fraction of a full debug build's compile time.
     scripts/build.sh -DKDRAY_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
         -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" "$@"
-    exclude=(-E "embree_agreement|accuracy_vs_time|device_bundle_smoke|docs_figures|install|render_file_schema|slurm_render|oclgrind|gpu_compile|rooms")
+    exclude=(-E "embree_agreement|accuracy_vs_time|device_bundle_smoke|docs_figures|readme|install|render_file_schema|slurm_render|oclgrind|gpu_compile|rooms")
     # Two tests at a time, as the Release run. The sanitizer run once went one at a time: with a
     # cold PoCL kernel cache LeakSanitizer's exit-time tracer crashed (SIGSEGV) in 3 of 4 runs.
     # It runs after the Release run, whose kernels fill the shared cache below, and warm it has

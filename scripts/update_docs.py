@@ -99,7 +99,7 @@ def short(scene):
     return folder if obj.startswith("frame_") or folder == "testdata" else obj.removesuffix(".obj")
 
 
-# ---- README: performance against Embree --------------------------------------------------------
+# ---- docs/performance.md, docs/accuracy.md, docs/kd-tree.md, docs/effects.md (once the README) ----
 
 def performance():
     build = load("bench-build", csv_fallback="bench-build.csv")

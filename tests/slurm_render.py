@@ -30,7 +30,7 @@ SKIP = 77
 SHARDS = 3
 SIZE = "64x48"
 # What a frame's record holds that depends on the run, not on the frame: times, and device bytes
-# (buffers left by the previous build are reused, README "Performance").
+# (buffers left by the previous build are reused, docs/performance.md).
 # "run": the index of the run (here, the shard) that rendered the frame into the folder.
 # Round trips (device_syncs, ...) follow the device's compute units, which shards may not share.
 RUN_DEPENDENT = {"mrays_per_s", "device_bytes", "device_bytes_per_triangle", "timings_ms", "run",

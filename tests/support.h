@@ -113,8 +113,8 @@ struct CommandResult {
     int status = -1;
     std::string out, err;
 };
-/// Checks the README's promise for bad input: exit `status` and one `kdray: error:` line on stderr,
-/// ending in a newline, that mentions each of `mentions`.
+/// Checks kdray's promise for bad input (docs/reliability.md): exit `status` and one `kdray:
+/// error:` line on stderr, ending in a newline, that mentions each of `mentions`.
 void check_error(const CommandResult& r, int status, std::initializer_list<std::string> mentions);
 /// The number of lines (newline characters) in `text`.
 std::size_t line_count(const std::string& text);

@@ -2,8 +2,9 @@
 // tracer (test_cli.cpp runs most cases on the CPU reference): `build` saves a tree that passes
 // the invariant checker, `render` writes AOVs whose every hit is brute force's; and the effects
 // `render` decides for a scene, with the reasons stats.json gives, for a matte scene, a mirror,
-// a glass and a lit scene, each a head-on quad whose MTL calls for one thing (README, "What is
-// simulated: only what the scene calls for"), and the rays the frame cast follow the decision.
+// a glass and a lit scene, each a head-on quad whose MTL calls for one thing (docs/effects.md,
+// "What is simulated: only what the scene calls for"), and the rays the frame cast follow the
+// decision.
 #include <doctest/doctest.h>
 
 #include <filesystem>

@@ -24,17 +24,19 @@ def main():
                  + result.stderr)
     with tempfile.TemporaryDirectory(prefix="kdray-docs-") as tmp:
         shutil.copytree(os.path.join(ROOT, "docs"), os.path.join(tmp, "docs"))
-        with open(os.path.join(ROOT, "README.md")) as f:
+        shutil.copy(os.path.join(ROOT, "README.md"), os.path.join(tmp, "README.md"))
+        page = os.path.join(tmp, "docs", "performance.md")
+        with open(page) as f:
             text = f.read()
         start = text.index("<!-- generated: performance -->")
         row = text.index("\n| build ms", start) + 1
         end = text.index("\n", row)
         cells = text[row:end].split(" | ")
         cells[-1] = "99.99 |"  # the ratio of the table's first row
-        with open(os.path.join(tmp, "README.md"), "w") as f:
+        with open(page, "w") as f:
             f.write(text[:row] + " | ".join(cells) + text[end:])
         drift = check(tmp)
-        if drift.returncode == 0 or "README.md: table 'performance'" not in drift.stderr:
+        if drift.returncode == 0 or "docs/performance.md: table 'performance'" not in drift.stderr:
             sys.exit(f"a changed figure passed the check (exit {drift.returncode}): "
                      f"{drift.stderr}")
     print("generated tables match their data; a changed figure is refused")

@@ -212,7 +212,7 @@ HitBuffer read_aov(const fs::path& path) {
     if (!z || !prim) throw Error("cannot read " + path.string() + ": no Z or prim_id channel");
     if (z->is_uint || !prim->is_uint)
         throw Error("cannot read " + path.string() +
-                    ": Z must be float32 and prim_id uint32 (conventions.md)");
+                    ": Z must be float32 and prim_id uint32 (docs/conventions.md)");
     const ExrChannel* n[3] = {exr.find("N.X"), exr.find("N.Y"), exr.find("N.Z")};
 
     HitBuffer result;
