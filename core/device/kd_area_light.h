@@ -8,8 +8,11 @@
  * to that point. The estimate of the irradiance it brings is Ke cos_light / (d^2 pdf), pdf the
  * probability density of the point per unit area (the emitter's probability / its area).
  *
- * Every random number comes from a hash of the shading point and the ray that reached it, not
- * from per-pixel state, so that the host and a kernel draw the same samples from the same hits.
+ * A pixel's samples draw their numbers from its low-discrepancy sequence (kd_shading.h's
+ * KdSampleRandom), so that with spp > 1 the light samples of a pixel spread over the emitters
+ * evenly instead of clumping; with one sample, or independent samples, each number comes from a
+ * hash of the shading point and the ray that reached it. Either way the host and a kernel draw
+ * the same samples from the same hits.
  */
 #ifndef KDRAY_KD_AREA_LIGHT_H
 #define KDRAY_KD_AREA_LIGHT_H
@@ -91,20 +94,35 @@ KDRAY_HOT_INLINE int kd_emitter_point(KDRAY_GLOBAL const kd_f32* tri, const kd_f
 /* One sample of the light of the frame's emitters at p (geometric normal ng, facing the viewer;
  * shading normal ns) for the eye direction `dir`, reflected by m with the diffuse colour
  * `diffuse` (kd_reflected, the BRDF times
- * the cosine, as the point and directional lights are), into out; one area-light shadow ray. */
+ * the cosine, as the point and directional lights are), into out; one area-light shadow ray.
+ * random: the sample's numbers, or 0 to hash them from the shading point. */
 KDRAY_HOT_INLINE void kd_area_light(const KdSceneView* scene, const KdView* view,
                                     KDRAY_GLOBAL const KdMaterial* m, const kd_f32* diffuse,
                                     const kd_f32* p, const kd_f32* ng, const kd_f32* ns,
-                                    const kd_f32* dir, kd_f32* out, KdRayCounts* rays) {
-    const kd_u32 h0 = kd_shading_key(view, p, dir), h1 = kd_hash(h0), h2 = kd_hash(h1);
+                                    const kd_f32* dir, KdSampleRandom* random, kd_f32* out,
+                                    KdRayCounts* rays) {
+    kd_f32 u_pick, u1, u2;
+    if (random) {
+        /* The point from a pair of dimensions, so that it is the pair's R2 point; then the
+         * emitter. */
+        random->dimension = (random->dimension + 1u) & ~1u;
+        u1 = kd_sample_uniform(random);
+        u2 = kd_sample_uniform(random);
+        u_pick = kd_sample_uniform(random);
+    } else {
+        const kd_u32 h0 = kd_shading_key(view, p, dir), h1 = kd_hash(h0), h2 = kd_hash(h1);
+        u_pick = kd_unit_float(h0);
+        u1 = kd_unit_float(h1);
+        u2 = kd_unit_float(h2);
+    }
     KDRAY_GLOBAL const KdEmitter* e =
-        scene->emitters + kd_pick_emitter(scene->emitters, view->emitter_count, kd_unit_float(h0));
+        scene->emitters + kd_pick_emitter(scene->emitters, view->emitter_count, u_pick);
     KDRAY_GLOBAL const kd_f32* tri =
         scene->triangles + (size_t)e->triangle * KDRAY_FLOATS_PER_TRIANGLE;
     KdRay shadow;
     kd_f32 to_light[3], d2, distance, cos_light, twice_area;
-    if (!kd_emitter_point(tri, p, ng, view->ray_epsilon, kd_unit_float(h1), kd_unit_float(h2),
-                          &shadow, to_light, &d2, &distance, &cos_light, &twice_area))
+    if (!kd_emitter_point(tri, p, ng, view->ray_epsilon, u1, u2, &shadow, to_light, &d2,
+                          &distance, &cos_light, &twice_area))
         return;
     const kd_f32 cos_l = kd_light_cosine(ng, ns, to_light);
     if (cos_l <= 0.0f) return;

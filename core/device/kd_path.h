@@ -34,23 +34,8 @@
 /* A path survives roulette with probability min(its largest throughput channel, this): below 1,
  * so that a path of throughput 1 (a white mirror room) still ends. */
 #define KDRAY_PATH_MAX_SURVIVAL 0.95f
-
-/* The random numbers of one sample: its pixel's key (the sample's own with independent
- * samples), its index, the dimensions drawn so far, and whether the samples are independent. */
-typedef struct KdPathRandom {
-    kd_u32 key;
-    kd_u32 sample;
-    kd_u32 dimension;
-    kd_u32 independent;
-} KdPathRandom;
-
-KDRAY_INLINE kd_f32 kd_path_uniform(KdPathRandom* r) {
-    const kd_u32 d = r->dimension++;
-    if (r->independent) return kd_unit_float(kd_hash(r->key ^ kd_hash((d + 1u) * 0x9E3779B9u)));
-    kd_u32 rotation = kd_hash(r->key ^ kd_hash((d >> 1) * 0x9E3779B9u + 0x632BE5ABu));
-    if (d & 1u) rotation = kd_hash(rotation);
-    return kd_unit_float(rotation + r->sample * ((d & 1u) ? KDRAY_R2_STEP1 : KDRAY_R2_STEP0));
-}
+/* The path integrator's numbers' own key (kd_sample_random). */
+#define KDRAY_PATH_SALT 0x68E31DA4u
 
 /* A unit-length basis (t, b, n) around the unit vector n, without a branch on which axis to
  * cross with (Duff et al., "Building an orthonormal basis, revisited", JCGT 2017). */
@@ -189,10 +174,10 @@ KDRAY_HOT_INLINE void kd_path_delta_lights(const KdSceneView* scene, const KdVie
  * sampling of the same direction, into out. */
 KDRAY_HOT_INLINE void kd_path_area_light(const KdSceneView* scene, const KdView* view,
                                          const KdPathLobes* l, const kd_f32* p, const kd_f32* ng,
-                                         const kd_f32* ns, const kd_f32* dir, KdPathRandom* random,
+                                         const kd_f32* ns, const kd_f32* dir, KdSampleRandom* random,
                                          kd_f32* out, KdRayCounts* rays) {
-    const kd_f32 u0 = kd_path_uniform(random), u1 = kd_path_uniform(random);
-    const kd_f32 u2 = kd_path_uniform(random);
+    const kd_f32 u0 = kd_sample_uniform(random), u1 = kd_sample_uniform(random);
+    const kd_f32 u2 = kd_sample_uniform(random);
     KDRAY_GLOBAL const KdEmitter* e =
         scene->emitters + kd_pick_emitter(scene->emitters, view->emitter_count, u0);
     KDRAY_GLOBAL const kd_f32* tri =
@@ -229,10 +214,10 @@ KDRAY_HOT_INLINE int kd_path_sample_lobes(const KdSceneView* scene, const KdView
                                           KDRAY_GLOBAL const KdMaterial* m,
                                           KDRAY_GLOBAL const kd_f32* tri, const KdPathLobes* l,
                                           const kd_f32* p, const kd_f32* ng, const kd_f32* ns,
-                                          const kd_f32* dir, KdPathRandom* random, KdRay* next,
+                                          const kd_f32* dir, KdSampleRandom* random, KdRay* next,
                                           kd_f32* factor, kd_f32* pdf) {
-    const kd_f32 u = kd_path_uniform(random), u1 = kd_path_uniform(random);
-    const kd_f32 u2 = kd_path_uniform(random);
+    const kd_f32 u = kd_sample_uniform(random), u1 = kd_sample_uniform(random);
+    const kd_f32 u2 = kd_sample_uniform(random);
     kd_f32 wi[3];
     next->tmin = 0.0f;
     next->tmax = KDRAY_INF;
@@ -302,10 +287,10 @@ KDRAY_HOT_INLINE int kd_path_sample_lobes(const KdSceneView* scene, const KdView
 
 /* One sample of the path integrator from the primary ray, its colour into rgb. The primary ray's
  * hit is `traced` when it was traced already (by the packet kernel). random: the sample's
- * numbers (kd_path_random). */
+ * numbers (kd_sample_random). */
 KDRAY_HOT_INLINE void kd_trace_path_sample(const KdSceneView* scene, const KdView* view,
                                            const KdRay* primary, const KdHit* traced,
-                                           KdPathRandom* random, kd_f32* rgb, KdRayCounts* rays,
+                                           KdSampleRandom* random, kd_f32* rgb, KdRayCounts* rays,
                                            KdHit* first_hit, kd_f32* first_normal) {
     rays->primary += 1u;
     kd_f32 beta[3] = {1.0f, 1.0f, 1.0f};
@@ -389,7 +374,7 @@ KDRAY_HOT_INLINE void kd_trace_path_sample(const KdSceneView* scene, const KdVie
         /* Russian roulette: an unbiased end to paths whose throughput has fallen. */
         if (segments >= KDRAY_PATH_ROULETTE_DEPTH) {
             const kd_f32 survive = KDRAY_FMIN(largest, KDRAY_PATH_MAX_SURVIVAL);
-            if (kd_path_uniform(random) >= survive) return;
+            if (kd_sample_uniform(random) >= survive) return;
             for (int c = 0; c < 3; ++c) beta[c] /= survive;
         }
         if (kind == 1)
@@ -398,20 +383,6 @@ KDRAY_HOT_INLINE void kd_trace_path_sample(const KdSceneView* scene, const KdVie
             rays->refraction += 1u;
         ray = next;
     }
-}
-
-/* The random numbers of sample s of pixel (x, y): a key of its own beside the jitter's. (Set
- * through a pointer: a struct returned by value is an sret argument, which LLVM marks noalias and
- * then, inlined, declares with llvm.experimental.noalias.scope.decl, an intrinsic that Oclgrind
- * 21.10 cannot run.) */
-KDRAY_INLINE void kd_path_random(const KdView* view, kd_u32 x, kd_u32 y, kd_u32 s,
-                                 KdPathRandom* r) {
-    r->independent = view->sampler == KDRAY_SAMPLER_INDEPENDENT;
-    r->key =
-        kd_hash((r->independent ? KDRAY_SAMPLE_KEY(view, x, y, s) : KDRAY_PIXEL_KEY(view, x, y)) ^
-                0x68E31DA4u);
-    r->sample = s;
-    r->dimension = 0u;
 }
 
 #endif /* KDRAY_KD_PATH_H */

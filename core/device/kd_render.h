@@ -20,6 +20,9 @@
 #include "core/device/kd_shading.h"
 #include "core/device/kd_texture.h"
 
+/* Whitted's area-light numbers' own key (kd_sample_random), apart from the path integrator's. */
+#define KDRAY_WHITTED_LIGHT_SALT 0x2C1B3C6Du
+
 /* The path integrator: always on the host (the reference renders either), in a kernel only when
  * its effects ask for it, so that a Whitted program holds none of it. */
 #if !defined(KDRAY_DEVICE_CODE) || (KDRAY_COMPILED_EFFECTS & KDRAY_EFFECT_PATH) != 0
@@ -39,8 +42,8 @@
 KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* view,
                                       KDRAY_GLOBAL const KdMaterial* m, KdHit hit, const kd_f32* p,
                                       const kd_f32* ng, const kd_f32* ns, const kd_f32* dir,
-                                      KDRAY_GLOBAL const kd_u32* occluded, kd_f32* out,
-                                      KdRayCounts* rays) {
+                                      KDRAY_GLOBAL const kd_u32* occluded, KdSampleRandom* random,
+                                      kd_f32* out, KdRayCounts* rays) {
     kd_f32 diffuse[3], ambient[3];
     kd_surface_colours(scene, view, m, hit, diffuse, ambient);
     /* Ambient light, reflected by Ka (the material's ambient holds Ka x the render file's). */
@@ -69,7 +72,7 @@ KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* vi
         kd_reflected(m, diffuse, ns, dir, to_light, irradiance, cos_l, out);
     }
     if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS))
-        kd_area_light(scene, view, m, diffuse, p, ng, ns, dir, out, rays);
+        kd_area_light(scene, view, m, diffuse, p, ng, ns, dir, random, out, rays);
 }
 
 /* One sample when neither reflection nor refraction is on: the primary ray and its direct light,
@@ -78,7 +81,8 @@ KDRAY_HOT_INLINE void kd_direct_light(const KdSceneView* scene, const KdView* vi
  * tree of one ray (weight 1, nothing pushed), so the two give identical colours. */
 KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdView* view,
                                              const KdRay* primary, const KdHit* traced,
-                                             KDRAY_GLOBAL const kd_u32* occluded, kd_f32* rgb,
+                                             KDRAY_GLOBAL const kd_u32* occluded,
+                                             KdSampleRandom* random, kd_f32* rgb,
                                              KdRayCounts* rays, KdHit* first_hit,
                                              kd_f32* first_normal) {
     rays->primary += 1u;
@@ -105,7 +109,8 @@ KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdV
     kd_shading_normal(scene, hit, ng, ns);
     const kd_f32 surface = 1.0f - m->transmit_fraction;
     if (surface > 0.0f)
-        kd_direct_light(scene, view, m, hit, p, ng, ns, primary->dir, occluded, direct, rays);
+        kd_direct_light(scene, view, m, hit, p, ng, ns, primary->dir, occluded, random, direct,
+                        rays);
     kd_f32 emitted[3] = {0.0f, 0.0f, 0.0f};
     if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS))
         kd_emitted(scene->triangles + (size_t)hit.prim * KDRAY_FLOATS_PER_TRIANGLE, m, primary->dir,
@@ -121,11 +126,12 @@ KDRAY_HOT_INLINE void kd_trace_direct_sample(const KdSceneView* scene, const KdV
  * traced next. */
 KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* view,
                                       const KdRay* primary, const KdHit* traced,
-                                      KDRAY_GLOBAL const kd_u32* occluded, kd_f32* rgb,
-                                      KdRayCounts* rays, KdHit* first_hit, kd_f32* first_normal) {
+                                      KDRAY_GLOBAL const kd_u32* occluded, KdSampleRandom* random,
+                                      kd_f32* rgb, KdRayCounts* rays, KdHit* first_hit,
+                                      kd_f32* first_normal) {
     if (!KDRAY_EFFECT_ON(view, KDRAY_EFFECT_REFLECTION | KDRAY_EFFECT_REFRACTION)) {
-        kd_trace_direct_sample(scene, view, primary, traced, occluded, rgb, rays, first_hit,
-                               first_normal);
+        kd_trace_direct_sample(scene, view, primary, traced, occluded, random, rgb, rays,
+                               first_hit, first_normal);
         return;
     }
     KdPendingRay stack[KDRAY_MAX_BOUNCES + 1];
@@ -170,7 +176,7 @@ KDRAY_HOT_INLINE void kd_trace_sample(const KdSceneView* scene, const KdView* vi
         const kd_f32 surface = 1.0f - m->transmit_fraction;
         if (surface > 0.0f)
             kd_direct_light(scene, view, m, hit, p, ng, ns, r.ray.dir, r.kind == 0u ? occluded : 0,
-                            direct, rays);
+                            random, direct, rays);
         kd_f32 emitted[3] = {0.0f, 0.0f, 0.0f};
         if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_AREA_LIGHTS)) kd_emitted(tri, m, r.ray.dir, emitted);
         for (int c = 0; c < 3; ++c)
@@ -316,15 +322,23 @@ KDRAY_HOT_INLINE void kd_render_pixel(const KdSceneView* scene, const KdView* vi
         kd_primary_ray(view, x, y, s, &primary);
 #if KDRAY_PATH_COMPILED
         if (KDRAY_EFFECT_ON(view, KDRAY_EFFECT_PATH)) {
-            KdPathRandom random;
-            kd_path_random(view, x, y, s, &random);
+            KdSampleRandom random;
+            kd_sample_random(view, x, y, s, KDRAY_PATH_SALT, &random);
             kd_trace_path_sample(scene, view, &primary, traced ? &hit : 0, &random, rgb, &out.rays,
                                  view->spp == 1u ? &out.centre_hit : 0, out.normal);
         } else
 #endif
+        {
+            /* Whitted's area-light samples from the pixel's sequence when there are several
+             * samples to spread (kd_area_light.h); one sample hashes its own. */
+            KdSampleRandom light_random;
+            const int stratified = view->spp > 1u && view->sampler != KDRAY_SAMPLER_INDEPENDENT;
+            if (stratified) kd_sample_random(view, x, y, s, KDRAY_WHITTED_LIGHT_SALT, &light_random);
             kd_trace_sample(scene, view, &primary, traced ? &hit : 0,
-                            occluded ? occluded + s * traced_stride : 0, rgb, &out.rays,
+                            occluded ? occluded + s * traced_stride : 0,
+                            stratified ? &light_random : 0, rgb, &out.rays,
                             view->spp == 1u ? &out.centre_hit : 0, out.normal);
+        }
         for (int c = 0; c < 3; ++c)
             out.rgb[c] = KDRAY_FMIN(out.rgb[c] + rgb[c], KDRAY_RADIANCE_MAX);
     }

@@ -164,6 +164,42 @@ KDRAY_INLINE kd_f32 kd_unit_float(kd_u32 h) {
     return KDRAY_UNIT_FLOAT((kd_f32), h);
 }
 
+/* The random numbers of one sample beyond its camera jitter: its pixel's key (the sample's own
+ * with independent samples), its index, the dimensions drawn so far, and whether the samples are
+ * independent. Dimension i of sample s is coordinate i & 1 of point s of the pixel's R2 sequence,
+ * rotated by a hash of the key and of i / 2: a function of (pixel, s, i) alone, so that the host
+ * and a kernel draw the same numbers whatever order they shade pixels in, and a pixel's samples
+ * are stratified in each pair of dimensions. The path integrator draws its vertices' numbers from
+ * it (kd_path.h), Whitted's integrator its area-light samples (kd_render.h). */
+typedef struct KdSampleRandom {
+    kd_u32 key;
+    kd_u32 sample;
+    kd_u32 dimension;
+    kd_u32 independent;
+} KdSampleRandom;
+
+KDRAY_INLINE kd_f32 kd_sample_uniform(KdSampleRandom* r) {
+    const kd_u32 d = r->dimension++;
+    if (r->independent) return kd_unit_float(kd_hash(r->key ^ kd_hash((d + 1u) * 0x9E3779B9u)));
+    kd_u32 rotation = kd_hash(r->key ^ kd_hash((d >> 1) * 0x9E3779B9u + 0x632BE5ABu));
+    if (d & 1u) rotation = kd_hash(rotation);
+    return kd_unit_float(rotation + r->sample * ((d & 1u) ? KDRAY_R2_STEP1 : KDRAY_R2_STEP0));
+}
+
+/* The random numbers of sample s of pixel (x, y) for the integrator `salt` names: a key of their
+ * own beside the jitter's. (Set through a pointer: a struct returned by value is an sret
+ * argument, which LLVM marks noalias and then, inlined, declares with
+ * llvm.experimental.noalias.scope.decl, an intrinsic that Oclgrind 21.10 cannot run.) */
+KDRAY_INLINE void kd_sample_random(const KdView* view, kd_u32 x, kd_u32 y, kd_u32 s, kd_u32 salt,
+                                   KdSampleRandom* r) {
+    r->independent = view->sampler == KDRAY_SAMPLER_INDEPENDENT;
+    r->key =
+        kd_hash((r->independent ? KDRAY_SAMPLE_KEY(view, x, y, s) : KDRAY_PIXEL_KEY(view, x, y)) ^
+                salt);
+    r->sample = s;
+    r->dimension = 0u;
+}
+
 /* Geometric unit normal of a triangle, facing against `dir`. */
 KDRAY_HOT_INLINE void kd_facing_normal(KDRAY_GLOBAL const kd_f32* tri, const kd_f32* dir,
                                        kd_f32* n) {

@@ -250,7 +250,7 @@ KDRAY_HOT_INLINE void kd_pixel_work_item(
         pixel.rays.area_shadow = 0u;
         KdRay primary;
         kd_primary_ray(view, x, y, 0u, &primary);
-        kd_trace_direct_sample(&scene, view, &primary, &hit, blocked, pixel.rgb, &pixel.rays,
+        kd_trace_direct_sample(&scene, view, &primary, &hit, blocked, 0, pixel.rgb, &pixel.rays,
                                &pixel.centre_hit, pixel.normal);
     } else {
         kd_render_pixel(&scene, view, x, y,
