@@ -101,22 +101,27 @@ KDRAY_HOT_INLINE void kd_area_light(const KdSceneView* scene, const KdView* view
                                     const kd_f32* p, const kd_f32* ng, const kd_f32* ns,
                                     const kd_f32* dir, KdSampleRandom* random, kd_f32* out,
                                     KdRayCounts* rays) {
-    kd_f32 u_pick, u1, u2;
+    KDRAY_GLOBAL const KdEmitter* e;
+    kd_f32 u1, u2;
     if (random) {
-        /* The point from a pair of dimensions, so that it is the pair's R2 point; then the
-         * emitter. */
+        /* One pair of dimensions for the emitter and the point on it, so that the pixel's
+         * samples are stratified over both: the first coordinate picks the emitter and, stretched
+         * over the emitter's interval of the CDF, places the point with the second (pbrt's
+         * reuse of a sample). */
         random->dimension = (random->dimension + 1u) & ~1u;
-        u1 = kd_sample_uniform(random);
+        const kd_f32 u = kd_sample_uniform(random);
         u2 = kd_sample_uniform(random);
-        u_pick = kd_sample_uniform(random);
+        const kd_u32 i = kd_pick_emitter(scene->emitters, view->emitter_count, u);
+        e = scene->emitters + i;
+        const kd_f32 below = i > 0u ? scene->emitters[i - 1u].cdf : 0.0f;
+        u1 = KDRAY_FMIN((u - below) / e->probability, 0.99999994f);
     } else {
         const kd_u32 h0 = kd_shading_key(view, p, dir), h1 = kd_hash(h0), h2 = kd_hash(h1);
-        u_pick = kd_unit_float(h0);
+        e = scene->emitters +
+            kd_pick_emitter(scene->emitters, view->emitter_count, kd_unit_float(h0));
         u1 = kd_unit_float(h1);
         u2 = kd_unit_float(h2);
     }
-    KDRAY_GLOBAL const KdEmitter* e =
-        scene->emitters + kd_pick_emitter(scene->emitters, view->emitter_count, u_pick);
     KDRAY_GLOBAL const kd_f32* tri =
         scene->triangles + (size_t)e->triangle * KDRAY_FLOATS_PER_TRIANGLE;
     KdRay shadow;

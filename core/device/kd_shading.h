@@ -165,25 +165,66 @@ KDRAY_INLINE kd_f32 kd_unit_float(kd_u32 h) {
 }
 
 /* The random numbers of one sample beyond its camera jitter: its pixel's key (the sample's own
- * with independent samples), its index, the dimensions drawn so far, and whether the samples are
- * independent. Dimension i of sample s is coordinate i & 1 of point s of the pixel's R2 sequence,
- * rotated by a hash of the key and of i / 2: a function of (pixel, s, i) alone, so that the host
- * and a kernel draw the same numbers whatever order they shade pixels in, and a pixel's samples
- * are stratified in each pair of dimensions. The path integrator draws its vertices' numbers from
- * it (kd_path.h), Whitted's integrator its area-light samples (kd_render.h). */
+ * with independent samples), its index, the pixel's sample count, the dimensions drawn so far, and
+ * whether the samples are independent. Dimension i of sample s is coordinate i & 1 of a point of
+ * the pixel's R2 sequence, rotated by a hash of the key and of the pair i / 2: a function of
+ * (pixel, s, i) alone, so that the host and a kernel draw the same numbers whatever order they
+ * shade pixels in, and a pixel's samples are stratified in each pair of dimensions. Every pair
+ * takes its points in an order of its own, a permutation of the pixel's sample indices (kd_permute,
+ * Kollig & Keller's padding): the R2 sequence with its one pair of steps, in the same order in
+ * every pair, makes each pair a shifted copy of the others (and of the camera jitter), so that an
+ * emitter's choice and the point on it, say, would move in lockstep over a pixel's samples and
+ * lose their stratification. The path integrator draws its vertices' numbers from it (kd_path.h),
+ * Whitted's integrator its area-light samples (kd_area_light.h). */
 typedef struct KdSampleRandom {
     kd_u32 key;
     kd_u32 sample;
+    kd_u32 count;
     kd_u32 dimension;
     kd_u32 independent;
 } KdSampleRandom;
 
+/* A permutation of [0, n), chosen by `seed`, applied to i < n: Kensler's hash-based permutation
+ * ("Correlated Multi-Jittered Sampling", Pixar 2013), cycle-walking inside the next power of two
+ * (fewer than two rounds on average). */
+KDRAY_INLINE kd_u32 kd_permute(kd_u32 i, kd_u32 n, kd_u32 seed) {
+    kd_u32 w = n - 1u;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    do {
+        i ^= seed;
+        i *= 0xe170893du;
+        i ^= seed >> 16;
+        i ^= (i & w) >> 4;
+        i ^= seed >> 8;
+        i *= 0x0929eb3fu;
+        i ^= seed >> 23;
+        i ^= (i & w) >> 1;
+        i *= 1u | seed >> 27;
+        i *= 0x6935fa69u;
+        i ^= (i & w) >> 11;
+        i *= 0x74dcb303u;
+        i ^= (i & w) >> 2;
+        i *= 0x9e501cc3u;
+        i ^= (i & w) >> 2;
+        i *= 0xc860a3dfu;
+        i &= w;
+        i ^= i >> 5;
+    } while (i >= n);
+    return (i + seed) % n;
+}
+
 KDRAY_INLINE kd_f32 kd_sample_uniform(KdSampleRandom* r) {
     const kd_u32 d = r->dimension++;
     if (r->independent) return kd_unit_float(kd_hash(r->key ^ kd_hash((d + 1u) * 0x9E3779B9u)));
-    kd_u32 rotation = kd_hash(r->key ^ kd_hash((d >> 1) * 0x9E3779B9u + 0x632BE5ABu));
-    if (d & 1u) rotation = kd_hash(rotation);
-    return kd_unit_float(rotation + r->sample * ((d & 1u) ? KDRAY_R2_STEP1 : KDRAY_R2_STEP0));
+    const kd_u32 pair = kd_hash(r->key ^ kd_hash((d >> 1) * 0x9E3779B9u + 0x632BE5ABu));
+    /* Both coordinates of a pair take the same point, so that the pair stays an R2 point. */
+    const kd_u32 index = r->count > 1u ? kd_permute(r->sample, r->count, pair) : r->sample;
+    const kd_u32 rotation = (d & 1u) ? kd_hash(pair) : pair;
+    return kd_unit_float(rotation + index * ((d & 1u) ? KDRAY_R2_STEP1 : KDRAY_R2_STEP0));
 }
 
 /* The random numbers of sample s of pixel (x, y) for the integrator `salt` names: a key of their
@@ -197,6 +238,7 @@ KDRAY_INLINE void kd_sample_random(const KdView* view, kd_u32 x, kd_u32 y, kd_u3
         kd_hash((r->independent ? KDRAY_SAMPLE_KEY(view, x, y, s) : KDRAY_PIXEL_KEY(view, x, y)) ^
                 salt);
     r->sample = s;
+    r->count = view->spp;
     r->dimension = 0u;
 }
 
