@@ -11,6 +11,7 @@
 #include "cli/report.h"
 #include "core/run/frame_pipeline.h"
 #include "core/run/stats_json.h"
+#include "core/run/warning_tally.h"
 #include "core/scene/scene.h"
 #include "core/tree/tree_file.h"
 
@@ -24,6 +25,11 @@ int run_build(const BuildCommand& command) {
     const auto load_start = FrameClock::now();
     Scene scene = load_obj(command.scene);
     const double load_ms = ms_since(load_start);
+    // --strict: the scene's warnings fail the build before the device opens.
+    if (command.strict) {
+        for (const std::string& warning : scene.warnings) print_warning(warning);
+        throw_if_strict(true, scene.warnings);
+    }
     const auto prepare_start = FrameClock::now();
     DeviceSession session(command.builder.device);
     const std::unique_ptr<TreeBuilder> builder = make_tree_builder(
@@ -41,6 +47,10 @@ int run_build(const BuildCommand& command) {
         std::vector<double> sorted = samples;
         std::sort(sorted.begin(), sorted.end());
         built.report.build_ms = sorted[sorted.size() / 2];
+    }
+    if (command.strict) {
+        for (const std::string& warning : built.report.warnings) print_warning(warning);
+        throw_if_strict(true, built.report.warnings);
     }
     if (!command.output.empty()) write_tree_file(command.output, built.tree, scene);
 

@@ -183,11 +183,6 @@ class RenderLog final : public RenderRunObserver {
                         const nlohmann::json& record) override {
         const std::size_t i = record["frame"].get<std::size_t>();
         const std::string input = record["input"].get<std::string>();
-        // The scene's warnings, as its record lists them.
-        for (const auto& warning : record["scene"]["warnings"])
-            spdlog::warn("{}", warning.get<std::string>());
-        for (const auto& warning : record["tree"].value("warnings", nlohmann::json::array()))
-            spdlog::warn("{}: {}", input, warning.get<std::string>());
         if (const std::string text = effects_text(record["effects"]); text != effects_said_) {
             spdlog::info("frame {}: effects now: {}", i, text);
             effects_said_ = text;
@@ -203,6 +198,8 @@ class RenderLog final : public RenderRunObserver {
                     ? fmt::format(", compile {:.0f}", record["compile_ms"].get<double>())
                     : std::string());
     }
+
+    void warned(const std::string& text) override { spdlog::warn("{}", text); }
 
     void frame_failed(std::size_t, const Error& e) override { spdlog::error("{}", e.what()); }
 
@@ -260,6 +257,7 @@ int run_render(const RenderCommand& command) {
     run_settings.skip_existing = command.skip_existing;
     run_settings.keep_going = command.keep_going;
     run_settings.warm_up = command.warm_up;
+    run_settings.strict = command.strict;
     RenderLog log(command);
     // The host's memory, the folder's stats.json and --skip-existing, before the device opens.
     RenderRun run(std::move(run_settings), log);
@@ -277,6 +275,8 @@ int run_render(const RenderCommand& command) {
     for (const int signal : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal, on_interrupt);
 
     const RenderRunOutcome outcome = run.run(*builder, *tracer);
+    // At info: --quiet keeps only the warnings themselves; stats.json's run record counts them.
+    if (!outcome.warnings.empty()) spdlog::info("{}", outcome.warnings);
     if (outcome.interrupted) {
         print_message("kdray: interrupted: ", std::to_string(outcome.rendered) +
                                                   " frame(s) complete in " + command.output_dir);

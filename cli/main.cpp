@@ -212,6 +212,9 @@ int main(int argc, char** argv) {
                      "benchmark: one warm-up build, then this many timed builds; the median is "
                      "reported as build_ms and every time as build_ms_samples")
         ->check(CLI::Range(1, 1000));
+    build_app->add_flag("--strict", build.strict,
+                        "any warning (the scene's, the tree's) is an error: exit 1, no tree "
+                        "written");
     add_builder_options(*build_app, build.builder);
 
     RenderCommand render;
@@ -269,6 +272,10 @@ int main(int argc, char** argv) {
     render_app->add_flag("--warm-up", render.warm_up,
                          "benchmarks: build and trace the first frame once, untimed, so that "
                          "program builds and first launches stay out of the frame times");
+    render_app->add_flag("--strict", render.strict,
+                         "any warning is an error (exit 1): a scene's fails its frame before the "
+                         "frame builds, a tree's after it; for farms that must not publish "
+                         "frames that warned");
     render_app->option_defaults()->group("Tracer");
     render_app
         ->add_option("--intersect", render.intersect,
