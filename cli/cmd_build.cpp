@@ -7,6 +7,8 @@
 #include "cl/backends.h"
 #include "cl/runtime/program_cache.h"
 #include "cli/commands.h"
+#include "cli/devices.h"
+#include "cli/inputs.h"
 #include "cli/log.h"
 #include "cli/report.h"
 #include "core/run/frame_pipeline.h"
@@ -22,6 +24,7 @@ int run_build(const BuildCommand& command) {
     // loaded, then the device opened and the builder prepared (its programs built). Loading on a
     // thread beside the preparation gained nothing on 2 cores (each slowed the other: Kitchen
     // process 994 -> 1010 ms, dragon res2 1217 -> 1266, medians of 8 alternating runs).
+    check_scene_input(command.scene);
     const auto load_start = FrameClock::now();
     Scene scene = load_obj(command.scene);
     const double load_ms = ms_since(load_start);
@@ -32,6 +35,7 @@ int run_build(const BuildCommand& command) {
     }
     const auto prepare_start = FrameClock::now();
     DeviceSession session(command.builder.device);
+    say_when_no_gpu(session, command.builder.device);
     const std::unique_ptr<TreeBuilder> builder = make_tree_builder(
         command.builder.builder, command.builder.build_params(kStaticBuildQuality), session);
     builder->prepare();

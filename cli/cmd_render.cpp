@@ -16,6 +16,7 @@
 #include "cl/backends.h"
 #include "cl/runtime/program_cache.h"
 #include "cli/commands.h"
+#include "cli/devices.h"
 #include "cli/frame_selection.h"
 #include "cli/inputs.h"
 #include "cli/log.h"
@@ -231,10 +232,14 @@ int run_render(const RenderCommand& command) {
     RenderRunSettings run_settings;  // setup_ms counts from now
     // Check everything that can be checked before the first frame costs time.
     std::vector<std::string> inputs = expand_inputs(command.inputs);
-    std::vector<std::size_t> selected = select_frames(inputs.size(), command.frames, command.shard);
+    std::string past;  // frames of --frames past the inputs
+    std::vector<std::size_t> selected =
+        select_frames(inputs.size(), command.frames, command.shard, &past);
     if (selected.empty())
         throw UsageError("--frames/--shard select no frame of the " +
                          std::to_string(inputs.size()) + " inputs");
+    if (!past.empty() && command.strict) throw Error("--strict: " + past);
+    if (!past.empty()) spdlog::warn("{}", past);
     const OutputName output_name(command.name);
     check_output_names(inputs, selected, output_name, command);
     RenderSettings& settings = run_settings.render;
@@ -264,6 +269,7 @@ int run_render(const RenderCommand& command) {
     if (run.frames().empty()) return 0;
 
     DeviceSession session(command.builder.device);
+    say_when_no_gpu(session, command.builder.device);
     const std::unique_ptr<TreeBuilder> builder = make_tree_builder(
         command.builder.builder, command.builder.build_params(default_quality), session);
     const std::unique_ptr<Tracer> tracer = make_tracer(command.tracer, command.threads, session);
