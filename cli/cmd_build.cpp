@@ -7,10 +7,13 @@
 #include "cl/backends.h"
 #include "cl/runtime/program_cache.h"
 #include "cli/commands.h"
+#include "cli/devices.h"
+#include "cli/inputs.h"
 #include "cli/log.h"
 #include "cli/report.h"
 #include "core/run/frame_pipeline.h"
 #include "core/run/stats_json.h"
+#include "core/run/warning_tally.h"
 #include "core/scene/scene.h"
 #include "core/tree/tree_file.h"
 
@@ -21,11 +24,18 @@ int run_build(const BuildCommand& command) {
     // loaded, then the device opened and the builder prepared (its programs built). Loading on a
     // thread beside the preparation gained nothing on 2 cores (each slowed the other: Kitchen
     // process 994 -> 1010 ms, dragon res2 1217 -> 1266, medians of 8 alternating runs).
+    check_scene_input(command.scene);
     const auto load_start = FrameClock::now();
     Scene scene = load_obj(command.scene);
     const double load_ms = ms_since(load_start);
+    // --strict: the scene's warnings fail the build before the device opens.
+    if (command.strict) {
+        for (const std::string& warning : scene.warnings) print_warning(warning);
+        throw_if_strict(true, scene.warnings);
+    }
     const auto prepare_start = FrameClock::now();
     DeviceSession session(command.builder.device);
+    say_when_no_gpu(session, command.builder.device);
     const std::unique_ptr<TreeBuilder> builder = make_tree_builder(
         command.builder.builder, command.builder.build_params(kStaticBuildQuality), session);
     builder->prepare();
@@ -41,6 +51,10 @@ int run_build(const BuildCommand& command) {
         std::vector<double> sorted = samples;
         std::sort(sorted.begin(), sorted.end());
         built.report.build_ms = sorted[sorted.size() / 2];
+    }
+    if (command.strict) {
+        for (const std::string& warning : built.report.warnings) print_warning(warning);
+        throw_if_strict(true, built.report.warnings);
     }
     if (!command.output.empty()) write_tree_file(command.output, built.tree, scene);
 

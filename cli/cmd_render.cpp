@@ -16,6 +16,7 @@
 #include "cl/backends.h"
 #include "cl/runtime/program_cache.h"
 #include "cli/commands.h"
+#include "cli/devices.h"
 #include "cli/frame_selection.h"
 #include "cli/inputs.h"
 #include "cli/log.h"
@@ -183,11 +184,6 @@ class RenderLog final : public RenderRunObserver {
                         const nlohmann::json& record) override {
         const std::size_t i = record["frame"].get<std::size_t>();
         const std::string input = record["input"].get<std::string>();
-        // The scene's warnings, as its record lists them.
-        for (const auto& warning : record["scene"]["warnings"])
-            spdlog::warn("{}", warning.get<std::string>());
-        for (const auto& warning : record["tree"].value("warnings", nlohmann::json::array()))
-            spdlog::warn("{}: {}", input, warning.get<std::string>());
         if (const std::string text = effects_text(record["effects"]); text != effects_said_) {
             spdlog::info("frame {}: effects now: {}", i, text);
             effects_said_ = text;
@@ -203,6 +199,8 @@ class RenderLog final : public RenderRunObserver {
                     ? fmt::format(", compile {:.0f}", record["compile_ms"].get<double>())
                     : std::string());
     }
+
+    void warned(const std::string& text) override { spdlog::warn("{}", text); }
 
     void frame_failed(std::size_t, const Error& e) override { spdlog::error("{}", e.what()); }
 
@@ -234,10 +232,14 @@ int run_render(const RenderCommand& command) {
     RenderRunSettings run_settings;  // setup_ms counts from now
     // Check everything that can be checked before the first frame costs time.
     std::vector<std::string> inputs = expand_inputs(command.inputs);
-    std::vector<std::size_t> selected = select_frames(inputs.size(), command.frames, command.shard);
+    std::string past;  // frames of --frames past the inputs
+    std::vector<std::size_t> selected =
+        select_frames(inputs.size(), command.frames, command.shard, &past);
     if (selected.empty())
         throw UsageError("--frames/--shard select no frame of the " +
                          std::to_string(inputs.size()) + " inputs");
+    if (!past.empty() && command.strict) throw Error("--strict: " + past);
+    if (!past.empty()) spdlog::warn("{}", past);
     const OutputName output_name(command.name);
     check_output_names(inputs, selected, output_name, command);
     RenderSettings& settings = run_settings.render;
@@ -260,12 +262,14 @@ int run_render(const RenderCommand& command) {
     run_settings.skip_existing = command.skip_existing;
     run_settings.keep_going = command.keep_going;
     run_settings.warm_up = command.warm_up;
+    run_settings.strict = command.strict;
     RenderLog log(command);
     // The host's memory, the folder's stats.json and --skip-existing, before the device opens.
     RenderRun run(std::move(run_settings), log);
     if (run.frames().empty()) return 0;
 
     DeviceSession session(command.builder.device);
+    say_when_no_gpu(session, command.builder.device);
     const std::unique_ptr<TreeBuilder> builder = make_tree_builder(
         command.builder.builder, command.builder.build_params(default_quality), session);
     const std::unique_ptr<Tracer> tracer = make_tracer(command.tracer, command.threads, session);
@@ -277,6 +281,8 @@ int run_render(const RenderCommand& command) {
     for (const int signal : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal, on_interrupt);
 
     const RenderRunOutcome outcome = run.run(*builder, *tracer);
+    // At info: --quiet keeps only the warnings themselves; stats.json's run record counts them.
+    if (!outcome.warnings.empty()) spdlog::info("{}", outcome.warnings);
     if (outcome.interrupted) {
         print_message("kdray: interrupted: ", std::to_string(outcome.rendered) +
                                                   " frame(s) complete in " + command.output_dir);

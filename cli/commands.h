@@ -33,6 +33,7 @@ struct BuildCommand {
     std::string output;  // tree file, optional
     bool json = false;
     int repeat = 1;  // > 1: one warm-up build, then this many timed builds, median reported
+    bool strict = false;  // any warning is an error
     BuilderOptions builder;
 };
 
@@ -56,6 +57,7 @@ struct RenderCommand {
     std::string shard;        // I/N
     bool keep_going = false;  // render the remaining frames after a bad one
     bool warm_up = false;     // benchmarks: render the first frame once, untimed, before the run
+    bool strict = false;      // any warning is an error, before the frame builds where it can
     std::string intersect = "watertight";  // ray-triangle test: "watertight" or "moller"
     std::string packets = "auto";  // primary rays as packets: "auto" (CPU devices), "on", "off"
     BuilderOptions builder;

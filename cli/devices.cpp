@@ -3,6 +3,8 @@
 #include "cl/runtime/device.h"
 #include "core/error.h"
 
+#include <spdlog/spdlog.h>
+
 namespace kdray::cli {
 
 nlohmann::json list_devices_json() {
@@ -24,6 +26,17 @@ nlohmann::json list_devices_json() {
                        {"global_mem_bytes", d.global_mem_bytes},
                        {"max_alloc_bytes", d.max_alloc_bytes}});
     return out;
+}
+
+void say_when_no_gpu(DeviceSession& session, const std::string& selector) {
+    if (!selector.empty()) return;
+    session.opened = [](const ClDevice& device) {
+        if (device.is_gpu()) return;
+        spdlog::info(
+            "no OpenCL GPU found: kdray runs on the {} device '{}' ({}); `kdray stats` lists "
+            "the devices",
+            device.info().type, device.info().name, device.info().platform);
+    };
 }
 
 }  // namespace kdray::cli

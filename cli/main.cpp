@@ -25,6 +25,7 @@
 #include "core/error.h"
 #include "core/io/image_codec.h"
 #include "core/render/render_file.h"
+#include "core/text/nearest_name.h"
 #include "core/version.h"
 
 namespace {
@@ -48,8 +49,9 @@ const CLI::Validator kFiniteNumber(
 void add_builder_options(CLI::App& app, BuilderOptions& o) {
     app.option_defaults()->group("Device");
     app.add_option("--device", o.device,
-                   "OpenCL device: an index from `kdray stats` or a name substring "
-                   "(default: the first GPU, else the first device)");
+                   "OpenCL device: gpu, cpu (the first of that type), an index from `kdray "
+                   "stats` or a part of its name (default: the first GPU, else the first "
+                   "device)");
     app.option_defaults()->group("Tree");
     app.add_option("--builder", o.builder, "kd-tree builder")
         ->check(CLI::IsMember({"opencl", "reference"}))
@@ -130,35 +132,6 @@ void keep_freed_memory_for_reuse() {
 #endif
 }
 
-/// Levenshtein distance, for "did you mean".
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-    std::vector<std::size_t> row(b.size() + 1);
-    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-    for (std::size_t i = 1; i <= a.size(); ++i) {
-        std::size_t diagonal = row[0];
-        row[0] = i;
-        for (std::size_t j = 1; j <= b.size(); ++j) {
-            const std::size_t up = row[j];
-            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
-            diagonal = up;
-        }
-    }
-    return row[b.size()];
-}
-
-/// "did you mean ..." with the names of `app` (its subcommands or its options) nearest to
-/// `given`, or "" when none is near (at most 2 edits, or a third of the name).
-std::string nearest_name(const std::string& given, const std::vector<std::string>& names) {
-    std::string best;
-    std::size_t best_distance = std::max<std::size_t>(2, given.size() / 3) + 1;
-    for (const std::string& name : names)
-        if (const std::size_t d = edit_distance(given, name); d < best_distance) {
-            best_distance = d;
-            best = name;
-        }
-    return best.empty() ? "" : "; did you mean '" + best + "'?";
-}
-
 /// Every long option name of `app`, with its dashes.
 std::vector<std::string> long_option_names(const CLI::App& app) {
     std::vector<std::string> names;
@@ -212,6 +185,9 @@ int main(int argc, char** argv) {
                      "benchmark: one warm-up build, then this many timed builds; the median is "
                      "reported as build_ms and every time as build_ms_samples")
         ->check(CLI::Range(1, 1000));
+    build_app->add_flag("--strict", build.strict,
+                        "any warning (the scene's, the tree's) is an error: exit 1, no tree "
+                        "written");
     add_builder_options(*build_app, build.builder);
 
     RenderCommand render;
@@ -269,6 +245,10 @@ int main(int argc, char** argv) {
     render_app->add_flag("--warm-up", render.warm_up,
                          "benchmarks: build and trace the first frame once, untimed, so that "
                          "program builds and first launches stay out of the frame times");
+    render_app->add_flag("--strict", render.strict,
+                         "any warning is an error (exit 1): a scene's fails its frame before the "
+                         "frame builds, a tree's after it; for farms that must not publish "
+                         "frames that warned");
     render_app->option_defaults()->group("Tracer");
     render_app
         ->add_option("--intersect", render.intersect,
@@ -287,8 +267,9 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     render_app->option_defaults()->group("Frames");
     render_app->add_option("--frames", render.frames,
-                           "render only frames START:END[:STEP] (END included; frame numbers are "
-                           "positions in the naturally sorted inputs)");
+                           "render only frames START:END[:STEP] (END included), N (one frame) "
+                           "or START-END; frame numbers are positions in the naturally sorted "
+                           "inputs, from 0");
     render_app->add_option("--shard", render.shard,
                            "render every N-th of the selected frames, starting at the I-th (I/N), "
                            "e.g. --shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT");
@@ -325,6 +306,14 @@ int main(int argc, char** argv) {
         ->check(kFiniteNumber)
         ->check(CLI::Range(0.0, 1.0));
 
+    // A usage error points at the help of the command it was given to: `kdray render --help`
+    // lists render's options, `kdray --help` only the commands.
+    const auto see_help = [&] {
+        for (const CLI::App* sub : {build_app, render_app, stats_app, compare_app})
+            if (sub->parsed()) return " (see kdray " + sub->get_name() + " --help)";
+        return std::string(" (see kdray --help)");
+    };
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -336,18 +325,19 @@ int main(int argc, char** argv) {
         if (!first.empty() && first[0] != '-' && first != "build" && first != "render" &&
             first != "stats" && first != "compare")
             hint = "'" + first + "' is not a command" +
-                   nearest_name(first, {"build", "render", "stats", "compare"});
+                   kdray::did_you_mean(first, {"build", "render", "stats", "compare"});
         for (const CLI::App* sub : {build_app, render_app, stats_app, compare_app})
             if (sub->parsed())
                 for (int i = 2; i < argc && hint.empty(); ++i) {
                     std::string arg = argv[i];
                     arg = arg.substr(0, arg.find('='));
                     if (arg.rfind("--", 0) == 0 && !sub->get_option_no_throw(arg))
-                        if (const std::string near = nearest_name(arg, long_option_names(*sub));
+                        if (const std::string near =
+                                kdray::did_you_mean(arg, long_option_names(*sub));
                             !near.empty())
                             hint = "unknown option '" + arg + "'" + near;
                 }
-        print_error((hint.empty() ? std::string(e.what()) : hint) + " (see kdray --help)");
+        print_error((hint.empty() ? std::string(e.what()) : hint) + see_help());
         return 2;
     }
 
@@ -358,17 +348,18 @@ int main(int argc, char** argv) {
         if (!o->retired_max_depth.empty()) {
             print_error(
                 "--max-depth is gone: --tree-depth sets the kd-tree's depth limit; on "
-                "render, --ray-depth the render file's max_depth (see kdray --help)");
+                "render, --ray-depth the render file's max_depth" +
+                see_help());
             return 2;
         }
 
     // `build -o ""` exited 0 having written nothing, and `render -o ""` blamed a folder named "".
     if (build_app->count("--output") > 0 && build.output.empty()) {
-        print_error("build -o/--output: the tree file's name is empty (see kdray --help)");
+        print_error("build -o/--output: the tree file's name is empty" + see_help());
         return 2;
     }
     if (*render_app && render.output_dir.empty()) {
-        print_error("render -o/--output: the output folder's name is empty (see kdray --help)");
+        print_error("render -o/--output: the output folder's name is empty" + see_help());
         return 2;
     }
 
@@ -378,7 +369,7 @@ int main(int argc, char** argv) {
         for (const BuilderOptions* o : {&build.builder, &render.builder, &stats.builder})
             kdray::validate_build_params(o->build_params(kdray::kStaticBuildQuality));
     } catch (const kdray::Error& e) {
-        print_error(std::string(e.what()) + " (see kdray --help)");
+        print_error(std::string(e.what()) + see_help());
         return 2;
     }
 
@@ -391,7 +382,7 @@ int main(int argc, char** argv) {
         finish_stdout();
         return status;
     } catch (const kdray::UsageError& e) {
-        print_error(e.what());
+        print_error(e.what() + see_help());
         return 2;
     } catch (const kdray::Error& e) {
         print_error(e.what());

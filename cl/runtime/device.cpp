@@ -180,6 +180,21 @@ ClDevice::ClDevice(const std::string& selector)
                     break;
                 }
             if (!chosen) chosen = &found.front();
+        } else if (const std::string type = lower(selector);
+                   type == "gpu" || type == "cpu" || type == "accelerator") {
+            // A device type, as pbrt's --gpu and Blender's Cycles device setting choose; a name
+            // containing "gpu" or "cpu" is still reachable by more of its name.
+            for (const FoundDevice& f : found)
+                if (lower(f.info.type) == type) {
+                    chosen = &f;
+                    break;
+                }
+            if (!chosen)
+                throw Error("no OpenCL device of type " +
+                            device_type_name(type == "gpu"   ? CL_DEVICE_TYPE_GPU
+                                             : type == "cpu" ? CL_DEVICE_TYPE_CPU
+                                                             : CL_DEVICE_TYPE_ACCELERATOR) +
+                            " here; the devices are " + describe_cl_devices(infos(found)));
         } else if (is_index(selector)) {
             const std::size_t index = std::stoul(selector);
             if (index < found.size()) chosen = &found[index];

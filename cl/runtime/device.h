@@ -55,9 +55,10 @@ struct DeviceTraffic {
 /// gave back (BufferPool).
 class ClDevice {
   public:
-    /// selector: "" picks the first GPU, or the first device when there is no GPU; a number picks
-    /// that index of list_cl_devices(); anything else picks the first device whose name contains
-    /// it (case-insensitive). Throws Error listing the devices when nothing matches.
+    /// selector: "" picks the first GPU, or the first device when there is no GPU; "gpu", "cpu"
+    /// or "accelerator" (any case) the first device of that type; a number picks that index of
+    /// list_cl_devices(); anything else picks the first device whose name contains it
+    /// (case-insensitive). Throws Error listing the devices when nothing matches.
     explicit ClDevice(const std::string& selector = "");
     /// Releases the kept buffers; in a sanitizer build (KDRAY_SANITIZE) a buffer of allocate()'s
     /// still alive then is reported by its name and fails the process (exit 23, as LeakSanitizer

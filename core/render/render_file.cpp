@@ -23,6 +23,7 @@
 #include "core/error.h"
 #include "core/io/input_file.h"
 #include "core/render/camera.h"
+#include "core/text/nearest_name.h"
 
 namespace kdray {
 namespace {
@@ -216,13 +217,28 @@ class RenderFileParser {
         return parent.empty() ? std::string(key) : parent + "." + std::string(key);
     }
 
-    /// Every key of `object` must be one of `allowed`.
+    /// Every key of `object` must be one of `allowed`; an unknown one is named with the nearest
+    /// allowed name ("max_dpeth": did you mean 'max_depth'?).
     void check_fields(const json& object, const std::string& path,
                       std::initializer_list<std::string_view> allowed) const {
         for (const auto& item : object.items()) {
-            if (std::find(allowed.begin(), allowed.end(), item.key()) == allowed.end())
-                throw Error(file_ + ": unknown field '" + join(path, item.key()) + "'");
+            if (std::find(allowed.begin(), allowed.end(), item.key()) != allowed.end()) continue;
+            throw Error(file_ + ": unknown field '" + join(path, item.key()) + "'" +
+                        did_you_mean(item.key(), {allowed.begin(), allowed.end()}));
         }
+    }
+
+    /// A light's strength under the other type's name (pbrt's and Mitsuba's directional lights
+    /// take an `intensity`-like value): told which name this type reads and why.
+    void check_light_strength(const json& light, const std::string& path, bool point) const {
+        const char* wrong = point ? "irradiance" : "intensity";
+        if (!light.contains(wrong)) return;
+        throw Error(file_ + ": unknown field '" + path + "." + wrong + "': " +
+                    (point ? "a point light's strength is its 'intensity' (falling off with "
+                             "the squared distance); 'irradiance' is a directional light's"
+                           : "a directional light's strength is its 'irradiance' (what a surface "
+                             "facing it receives, at any distance); 'intensity' is a point "
+                             "light's"));
     }
 
     void require_object(const json& value, const std::string& path) const {
@@ -356,12 +372,14 @@ class RenderFileParser {
                          "must be \"point\" or \"directional\" (is \"" + type + "\")");
             }
             if (light.type == Light::Type::point) {
+                check_light_strength(l, path, true);
                 check_fields(l, path, {"type", "position", "intensity"});
                 if (present(l, "position"))
                     light.position = dvec3(l["position"], path + ".position");
                 if (present(l, "intensity"))
                     light.intensity = dvec3(l["intensity"], path + ".intensity", true);
             } else {
+                check_light_strength(l, path, false);
                 check_fields(l, path, {"type", "direction", "irradiance"});
                 if (present(l, "direction"))
                     light.direction = dvec3(l["direction"], path + ".direction");

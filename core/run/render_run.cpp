@@ -10,6 +10,7 @@
 #include "core/io/frame_memory.h"
 #include "core/render/render_setup.h"
 #include "core/run/render_stats.h"
+#include "core/run/warning_tally.h"
 #include "core/scene/scene.h"
 #include "core/version.h"
 
@@ -70,6 +71,7 @@ void RenderRunObserver::skipping(std::size_t, std::size_t) {}
 void RenderRunObserver::framing_failed(const Error&, std::size_t) {}
 void RenderRunObserver::first_scene(const nlohmann::json&) {}
 void RenderRunObserver::frame_rendered(std::size_t, std::size_t, const nlohmann::json&) {}
+void RenderRunObserver::warned(const std::string&) {}
 void RenderRunObserver::frame_failed(std::size_t, const Error&) {}
 void RenderRunObserver::progress(std::size_t, std::size_t, double) {}
 void RenderRunObserver::frames_finished() {}
@@ -136,6 +138,9 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
         warm_up.number = selected_[0];
         warm_up.input = inputs[selected_[0]];
         warm_up.loader = loader_.get();
+        warm_up.loaded = [&](const Scene& scene) {
+            throw_if_strict(settings_.strict, scene.warnings);
+        };
         pipeline.render_frame(warm_up, FramePipeline::Output::Discard);
         warm_up_ms = ms_since(warm_up_start);
     }
@@ -148,6 +153,13 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
         observer_.first_scene(decide_effects(scene, pipeline.settings()).to_json());
         announced = true;
     };
+    // Each cause printed once; under --strict a scene's warnings fail its frame before it builds.
+    WarningTally warnings;
+    auto warn = [&](std::size_t frame, const std::vector<std::string>& texts) {
+        for (const std::string& text : texts)
+            if (warnings.add(frame, inputs[frame], text)) observer_.warned(text);
+        throw_if_strict(settings_.strict, texts);
+    };
     auto run_start = FrameClock::now();
     std::size_t done = 0;
     for (; done < selected_.size() && !observer_.interrupted(); ++done) {
@@ -156,9 +168,17 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
         job.number = i;
         job.input = inputs[i];
         job.loader = loader_.get();
-        job.loaded = announce;
+        job.loaded = [&, i](const Scene& scene) {
+            announce(scene);
+            warn(i, scene.warnings);
+        };
         try {
-            frames.push_back(pipeline.render_frame(job, FramePipeline::Output::Write));
+            nlohmann::json frame = pipeline.render_frame(job, FramePipeline::Output::Write);
+            std::vector<std::string> tree_warnings;
+            for (const auto& w : frame["tree"].value("warnings", nlohmann::json::array()))
+                tree_warnings.push_back(inputs[i] + ": " + w.get<std::string>());
+            warn(i, tree_warnings);
+            frames.push_back(std::move(frame));
             observer_.frame_rendered(done, selected_.size(), frames.back());
         } catch (const Error& e) {
             // Without keep_going the first bad frame ends the run; the frames before it
@@ -181,6 +201,7 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
     outcome.rendered = frames.size();
     outcome.failed = failures.size();
     outcome.interrupted = observer_.interrupted();
+    outcome.warnings = warnings.summary();
     const RenderSettings& render = settings_.render;
     nlohmann::json run = {
         {"kdray_version", kVersion},
@@ -202,6 +223,7 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
         {"setup_ms", setup_ms},
         {"frames", frames}};
     if (settings_.warm_up) run["warm_up_ms"] = warm_up_ms;
+    if (warnings.total() > 0) run["warnings"] = warnings.to_json();
     if (!failures.empty()) run["failed_frames"] = failures;
     if (outcome.interrupted) run["interrupted_after_frames"] = frames.size();
     if (!frames.empty() || !failures.empty()) {

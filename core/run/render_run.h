@@ -40,6 +40,7 @@ struct RenderRunSettings {
     bool skip_existing = false;  // leave out the frames the folder holds already
     bool keep_going = false;     // render the remaining frames after a bad one
     bool warm_up = false;        // render the first frame once, untimed and unwritten, first
+    bool strict = false;         // any warning fails the frame, before it builds where it can
     /// When the run began checking its inputs: stats.json's setup_ms counts from there.
     FrameClock::time_point setup_start = FrameClock::now();
 };
@@ -59,6 +60,8 @@ class RenderRunObserver {
     /// The run's `position`-th frame (from 0) of `count` rendered: its stats.json record.
     virtual void frame_rendered(std::size_t position, std::size_t count,
                                 const nlohmann::json& record);
+    /// A warning whose cause (core/run/warning_tally.h) the run had not seen: printed once.
+    virtual void warned(const std::string& text);
     /// Frame `frame` failed with `error`; the run goes on only with keep_going.
     virtual void frame_failed(std::size_t frame, const Error& error);
     /// After each frame, rendered or failed: `done` of `count`, `elapsed_ms` since the first
@@ -79,6 +82,7 @@ struct RenderRunOutcome {
     std::size_t rendered = 0;  // frames rendered and written
     std::size_t failed = 0;    // frames that failed (keep_going, or the one that stopped the run)
     bool interrupted = false;  // stopped by RenderRunObserver::interrupted
+    std::string warnings;      // WarningTally::summary(); empty when nothing was warned
 };
 
 class RenderRun {

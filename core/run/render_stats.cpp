@@ -287,6 +287,8 @@ nlohmann::json merge_render_stats(nlohmann::json previous, nlohmann::json run) {
     runs.push_back(std::move(run_record));
 
     nlohmann::json merged = std::move(settings);
+    // A run's warnings are its own record's: the top level speaks for the folder.
+    merged.erase("warnings");
     merged["runs"] = std::move(runs);
     merged["frames"] = nlohmann::json::array();
     for (nlohmann::json& frame : frames) merged["frames"].push_back(std::move(frame));

@@ -49,11 +49,17 @@ fs::path TextureLoader::resolve(const std::string& name) {
 }
 
 void TextureLoader::warn(Named& named) const {
-    std::string text = where_ + ": material '" + named.first_material + "'";
-    if (named.materials > 1)
-        text += " (and " + std::to_string(named.materials - 1) + " more that name it)";
-    text += ": " + named.statement + " '" + named.name + "' " + named.why +
-            (named.materials > 1 ? "; they render" : "; it renders") + " untextured";
+    std::string text = where_ + ": material '" + named.materials.front() + "'";
+    if (named.materials.size() > 1)
+        text += " (and " + std::to_string(named.materials.size() - 1) + " more that name it)";
+    text += ": ";
+    for (std::size_t k = 0; k < named.statements.size(); ++k)
+        text += (k == 0                             ? ""
+                 : k + 1 == named.statements.size() ? " and "
+                                                    : ", ") +
+                named.statements[k];
+    text += " '" + named.name + "' " + named.why +
+            (named.materials.size() > 1 ? "; they render" : "; it renders") + " untextured";
     scene_.warnings[named.warning] = std::move(text);
 }
 
@@ -61,9 +67,13 @@ int TextureLoader::load(const std::string& material, const std::string& statemen
                         const std::string& file) {
     auto [it, is_new] = named_.try_emplace(file);
     Named& named = it->second;
+    const auto remember = [](std::vector<std::string>& list, const std::string& value) {
+        if (std::find(list.begin(), list.end(), value) == list.end()) list.push_back(value);
+    };
     if (!is_new) {
         if (named.id < 0) {
-            ++named.materials;
+            remember(named.materials, material);
+            remember(named.statements, statement);
             warn(named);
         }
         return named.id;
@@ -80,9 +90,8 @@ int TextureLoader::load(const std::string& material, const std::string& statemen
                                   file + "': " + named.why);
     if (named.id < 0) {
         named.name = file;
-        named.first_material = material;
-        named.statement = statement;
-        named.materials = 1;
+        named.materials = {material};
+        named.statements = {statement};
         named.warning = scene_.warnings.size();
         scene_.warnings.emplace_back();
         warn(named);

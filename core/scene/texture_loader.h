@@ -2,9 +2,9 @@
 // "Textures"): a file name resolves relative to the MTL file's folder, else to the one file there
 // whose name matches it but for case; 8-bit (integer) images are sRGB and decoded to linear, float
 // images are linear. A file that is missing or unreadable is one warning naming the material and
-// the file (one per name, however many materials give it, with their count), and the material
-// renders untextured. Each name is resolved once, and each folder listed once: loading is linear
-// in the names and the folder's files.
+// the file (one per name, however many materials and statements give it, with their count), and the
+// material renders untextured. Each name is resolved once, and each folder listed once: loading is
+// linear in the names and the folder's files.
 #pragma once
 
 #include <filesystem>
@@ -12,6 +12,7 @@
 #include <string>
 #include <unordered_map>
 #include <utility>
+#include <vector>
 
 #include "core/scene/scene.h"
 
@@ -34,8 +35,10 @@ class TextureLoader {
     struct Named {
         int id = -1;
         std::size_t warning = 0;
-        std::string name, first_material, statement, why;
-        std::size_t materials = 0;
+        std::string name, why;
+        // The materials and the statements (map_Kd, map_Ka) that name it, each once, in order:
+        // a material whose map_Kd and map_Ka name one missing file is one warning naming both.
+        std::vector<std::string> materials, statements;
     };
 
     std::filesystem::path resolve(const std::string& name);

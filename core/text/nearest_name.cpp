@@ -1,0 +1,33 @@
+#include "core/text/nearest_name.h"
+
+#include <algorithm>
+
+namespace kdray {
+
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        std::size_t diagonal = row[0];
+        row[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            const std::size_t up = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
+            diagonal = up;
+        }
+    }
+    return row[b.size()];
+}
+
+std::string did_you_mean(std::string_view given, const std::vector<std::string>& names) {
+    std::string best;
+    std::size_t best_distance = std::max<std::size_t>(2, given.size() / 3) + 1;
+    for (const std::string& name : names)
+        if (const std::size_t d = edit_distance(given, name); d < best_distance) {
+            best_distance = d;
+            best = name;
+        }
+    return best.empty() ? "" : "; did you mean '" + best + "'?";
+}
+
+}  // namespace kdray
