@@ -47,7 +47,9 @@ struct RenderCommand {
     bool aov = false;
     bool heatmap = false;  // <stem>.cost.png: the centre rays' walk cost in false colour
     std::string format = "png";
+    bool format_given = false;    // --format was on the command line (cli/output_target.h)
     std::string name = "{stem}";  // a frame's file names (core/io/output_name.h)
+    bool stats_json = false;      // -o FILE: merge into stats.json beside it all the same
     bool skip_existing = false;   // render only the frames whose files are missing
     std::string tracer = "opencl";
     int threads = 0;

@@ -220,8 +220,9 @@ int main(int argc, char** argv) {
     render_app->add_option("frames", render.inputs, "OBJ frames (files or globs), natural order")
         ->required();
     render_app->option_defaults()->group("Image");
-    render_app->add_option("--camera", render.render_file,
-                           "render file (JSON, see conventions); default: frame the scene");
+    render_app->add_option("--render-file,--camera", render.render_file,
+                           "render file (JSON, see conventions): camera, image, integrator, "
+                           "lights; --camera is its old name. Default: frame the scene");
     render_app->add_option("--spp", render.spp, "samples per pixel (overrides the render file)")
         ->check(CLI::Range(1, 65536));
     render_app->add_option("--size", render.size,
@@ -235,11 +236,19 @@ int main(int argc, char** argv) {
                            "in stops: radiance x 2^STOPS before the image is written, from -64 to "
                            "64 (overrides the render file)");
     render_app->option_defaults()->group("Output");
-    render_app->add_option("-o,--output", render.output_dir, "output folder")->required();
+    render_app
+        ->add_option("-o,--output", render.output_dir,
+                     "output folder (DIR/, an existing folder, or a name without an image "
+                     "extension), or one frame's image file FILE.png|.jpg|.tif|.exr, its "
+                     "extension picking the format: its AOV and heat map go beside it as "
+                     "FILE-stem.aov.exr and FILE-stem.cost.png, and no stats.json unless "
+                     "--stats-json")
+        ->required();
     render_app
         ->add_option("--name", render.name,
                      "a frame's file names, from {stem} (the OBJ's name), {frame} and "
-                     "{frame:04} (its number, zero-padded), e.g. frame_{frame:04}")
+                     "{frame:04} (its number, zero-padded), e.g. frame_{frame:04}; an image "
+                     "extension (shot.jpg) picks the format")
         ->capture_default_str();
     render_app->add_flag("--skip-existing", render.skip_existing,
                          "render only the frames whose image (and AOV) are not in the folder yet; "
@@ -250,8 +259,13 @@ int main(int argc, char** argv) {
                          "also write <stem>.cost.png: each centre ray's kd-tree walk cost "
                          "(C_t x nodes + C_i x triangles) in false colour (viridis), from 0 "
                          "to the 99th percentile of the rays that enter the tree");
-    render_app->add_option("--format", render.format, "image format")
-        ->check(CLI::IsMember({"png", "exr"}))
+    render_app->add_flag("--stats-json", render.stats_json,
+                         "with -o FILE: merge the run into stats.json in FILE's folder too, as "
+                         "a folder's run always does");
+    render_app
+        ->add_option("--format", render.format,
+                     "image format: png, jpg, tif (8-bit sRGB) or exr (linear float)")
+        ->check(CLI::IsMember({"png", "exr", "jpg", "tif"}))
         ->capture_default_str();
     render_app->option_defaults()->group("Tracer");
     render_app->add_option("--tracer", render.tracer, "ray tracer")
@@ -352,6 +366,7 @@ int main(int argc, char** argv) {
     }
 
     init_logging(log_level.value_or(*render_app && render.quiet ? "quiet" : "info"));
+    render.format_given = render_app->count("--format") > 0;
     log_kernel_compiles();
 
     for (const BuilderOptions* o : {&build.builder, &render.builder, &stats.builder})

@@ -364,8 +364,9 @@ TEST_CASE("render --help lists its options under their groups, each group once")
     }
     for (const auto& [name, count] : headings) CHECK_MESSAGE(count == 1, name);
     const std::map<std::string, std::vector<std::string>> expected = {
-        {"Image", {"--camera", "--spp", "--size", "--ray-depth", "--exposure"}},
-        {"Output", {"--output", "--name", "--skip-existing", "--aov", "--format", "--quiet"}},
+        {"Image", {"--render-file", "--camera", "--spp", "--size", "--ray-depth", "--exposure"}},
+        {"Output",
+         {"--output", "--name", "--skip-existing", "--aov", "--format", "--stats-json", "--quiet"}},
         {"Tracer", {"--tracer", "--threads", "--intersect", "--packets"}},
         {"Frames", {"--frames", "--shard"}},
         {"Device", {"--device"}},
