@@ -37,7 +37,7 @@ nlohmann::json defaults_json(const BuilderOptions& o) {
             {"small_stage", small_stage_name(p.small_stage)},
             {"large_stage", large_stage_name(p.large_stage)},
             {"empty_bonus", p.empty_bonus},
-            {"max_depth", p.max_depth}};
+            {"tree_depth", p.max_depth}};
 }
 
 /// A render folder's stats.json, read and checked.

@@ -17,7 +17,8 @@ struct BuilderOptions {
     std::string device;              // index or name substring; empty: first GPU, else first device
     BuildParams params;              // the ladder's three below come from the quality
     std::string quality;             // low, medium, high; empty: the command's default
-    // Set by the user apart from the quality (--large-bins, --reclip-refs, --leaf-refs).
+    // Set by the user apart from the quality (--large-split-bins, --small-reclip-refs,
+    // --small-leaf-refs).
     std::optional<int> large_split_bins, small_reclip_refs, small_leaf_refs;
     std::string small_stage = "auto";  // --small-stage: small_stage_name's names (main.cpp checks)
     std::string large_stage = "auto";  // --large-stage: large_stage_name's names (main.cpp checks)

@@ -43,8 +43,10 @@ const CLI::Validator kFiniteNumber(
     },
     "FINITE");
 
-/// The tree's options (group "Tree") and the device's ("Device"). `--max-depth` is refused with
-/// the names that replace it: on render it read as the ray depth and set the tree's.
+/// The tree's options (group "Tree") and the device's ("Device"). Each option is named as its
+/// key in stats.json's "params" (`--large-node-threshold`, large_node_threshold), the short name
+/// it had before kept as an alias. `--max-depth` is refused with the names that replace it: on
+/// render it read as the ray depth and set the tree's.
 void add_builder_options(CLI::App& app, BuilderOptions& o) {
     app.option_defaults()->group("Device");
     app.add_option("--device", o.device,
@@ -54,22 +56,30 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
     app.add_option("--builder", o.builder, "kd-tree builder")
         ->check(CLI::IsMember({"opencl", "reference"}))
         ->capture_default_str();
-    app.add_option("--ct", o.params.costs.traversal, "SAH cost of a traversal step, C_t")
+    app.add_option("--cost-traversal,--ct", o.params.costs.traversal,
+                   "SAH cost of a traversal step, C_t")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
-    app.add_option("--ci", o.params.costs.intersection, "SAH cost of a triangle test, C_i")
+    app.add_option("--cost-intersection,--ci", o.params.costs.intersection,
+                   "SAH cost of a triangle test, C_i")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
-    app.add_option("--large-threshold", o.params.large_node_threshold,
+    app.add_option("--large-node-threshold,--large-threshold", o.params.large_node_threshold,
                    "OpenCL builder: nodes with more triangles are 'large' (empty-space cuts, then "
                    "a binned-SAH or median split); the rest get the full SAH (Zhou et al.'s T, "
                    "at most " +
                        std::to_string(KDRAY_SMALL_ROOT_MAX_REFS) + ")")
         ->check(CLI::Range(1, KDRAY_SMALL_ROOT_MAX_REFS))
         ->capture_default_str();
-    app.add_option("--empty-ratio", o.params.empty_space_ratio,
+    app.add_option("--empty-space-ratio,--empty-ratio", o.params.empty_space_ratio,
                    "OpenCL builder: cut off empty space larger than this share of a large "
                    "node's extent (Zhou et al.'s C_e)")
+        ->check(CLI::Range(0.0f, 1.0f))
+        ->capture_default_str();
+    app.add_option("--empty-bonus", o.params.empty_bonus,
+                   "a split with an empty side has its SAH cost scaled by (1 - this), in "
+                   "[0, 1): both builders")
+        ->check(kFiniteNumber)
         ->check(CLI::Range(0.0f, 1.0f))
         ->capture_default_str();
     app.add_option("--quality", o.quality,
@@ -79,16 +89,16 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
                        " for a render of several frames, else " +
                        kdray::build_quality_name(kdray::kStaticBuildQuality))
         ->check(CLI::IsMember({"low", "medium", "high"}));
-    app.add_option("--large-bins", o.large_split_bins,
+    app.add_option("--large-split-bins,--large-bins", o.large_split_bins,
                    "OpenCL builder: split a large node at the cheapest by the SAH of this many "
                    "bins per axis of its tight box; 0: at the spatial median (Zhou et al.). "
                    "Default: by --quality")
         ->check(CLI::Range(0, kdray::kMaxLargeSplitBins));
-    app.add_option("--reclip-refs", o.small_reclip_refs,
+    app.add_option("--small-reclip-refs,--reclip-refs", o.small_reclip_refs,
                    "OpenCL builder: a small node of at most this many triangles re-clips those "
                    "reaching past its box before its SAH search (0: never). Default: by --quality")
         ->check(CLI::Range(0, int(KDRAY_RECLIP_REFS)));
-    app.add_option("--leaf-refs", o.small_leaf_refs,
+    app.add_option("--small-leaf-refs,--leaf-refs", o.small_leaf_refs,
                    "OpenCL builder: a small node of at most this many triangles is a leaf "
                    "without an SAH search (0: search every node). Default: by --quality")
         ->check(CLI::Range(0, KDRAY_SMALL_ROOT_MAX_REFS));
@@ -106,7 +116,9 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
                    "or auto (level on a GPU, else chunked)")
         ->check(CLI::IsMember({"auto", "chunked", "level"}))
         ->capture_default_str();
-    app.add_option("--tree-depth", o.params.max_depth, "deepest kd-tree level")
+    app.add_option("--tree-depth", o.params.max_depth,
+                   "the kd-tree's depth limit (stats: params.tree_depth; the depth a tree "
+                   "reached is tree_depth_reached)")
         ->check(CLI::Range(1, KDRAY_MAX_DEPTH))
         ->capture_default_str();
     app.add_option("--max-depth", o.retired_max_depth)->group("");  // refused after parsing

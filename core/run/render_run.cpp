@@ -194,7 +194,8 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
         {"render_file", settings_.render_file},
         {"image", {{"width", render.width}, {"height", render.height}, {"spp", render.spp}}},
         {"integrator", integrator_name(render.integrator)},
-        {"max_depth", render.max_depth},
+        // The render file's max_depth, after --ray-depth: one name per depth in stats.json.
+        {"ray_depth", render.max_depth},
         // The 8-bit images' transform (EXR images are linear whatever it is).
         {"display", display_name(render.display)},
         {"overrides", settings_.overrides},

@@ -37,7 +37,7 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
     const BuildParams& p = tree.params;
     j["params"] = {{"cost_traversal", p.costs.traversal},
                    {"cost_intersection", p.costs.intersection},
-                   {"max_depth", p.max_depth}};
+                   {"tree_depth", p.max_depth}};
     if (tree.builder == "opencl") {
         j["quality"] = build_quality_of(p);
         j["params"]["large_node_threshold"] = p.large_node_threshold;
