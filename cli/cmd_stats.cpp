@@ -100,11 +100,21 @@ int run_stats(const StatsCommand& command) {
     }
     if (command.json) {
         std::cout << json_text(out) << "\n";
-    } else if (out.contains("items")) {
-        for (const auto& item : out["items"]) print_table(std::cout, item);
-        if (out.contains("combined")) print_table(std::cout, {{"combined", out["combined"]}});
-    } else {
+    } else if (command.paths.empty()) {
         print_table(std::cout, out);
+    } else {
+        for (std::size_t i = 0; i < command.paths.size(); ++i) {
+            const nlohmann::json& item = command.paths.size() == 1 ? out : out["items"][i];
+            if (i > 0) std::cout << '\n';
+            // A folder's frames one per line, above its summary.
+            if (item.contains("render"))
+                print_frame_table(std::cout, folder_stats(command.paths[i]));
+            print_grouped(std::cout, item);
+        }
+        if (out.contains("combined")) {
+            std::cout << "\nall the folders together\n";
+            print_grouped(std::cout, {{"combined", out["combined"]}});
+        }
     }
     return 0;
 }

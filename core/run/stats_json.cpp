@@ -98,7 +98,10 @@ nlohmann::json summarise_runs(const std::vector<nlohmann::json>& runs) {
     for (const char* part : parts)
         j["mean_" + std::string(part)] = mean(part_totals[part], numbers.size());
     j["frames_per_second"] = per_second(mean_ms);
-    j["frames_per_second_after_first"] = per_second(mean(after_first_ms, after_first));
+    // No frame after a first: no rate, rather than a rate of 0 that reads as "stalled".
+    j["frames_per_second_after_first"] =
+        after_first > 0 ? nlohmann::json(per_second(mean(after_first_ms, after_first)))
+                        : nlohmann::json(nullptr);
     j["frame_numbers"] = numbers;
     if (std::adjacent_find(numbers.begin(), numbers.end()) != numbers.end())
         j["warning"] = "some frame numbers appear in more than one folder";
