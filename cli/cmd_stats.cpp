@@ -70,6 +70,12 @@ nlohmann::json path_json(const std::string& path, TreeBuilder& builder) {
     nlohmann::json tree = to_json(
         compute_tree_stats(file.tree, std::size_t(file.scene_triangles), file.tree.params.costs));
     tree["builder"] = file.tree.builder;
+    // How it was built: the parameters the file keeps, and the ladder's name for them. The
+    // stages shape the build, not the tree, and the file does not keep them.
+    tree["params"] = params_json(file.tree);
+    tree["params"].erase("small_stage");
+    tree["params"].erase("large_stage");
+    if (file.tree.builder == "opencl") tree["quality"] = build_quality_of(file.tree.params);
     return {{"tree_file", {{"path", path}, {"scene", file.scene_path}}}, {"tree", tree}};
 }
 

@@ -135,3 +135,32 @@ TEST_CASE(
     CHECK(one_text.out.find("none (one frame)") != std::string::npos);
     fs::remove_all(dir);
 }
+
+TEST_CASE("kdray stats TREE.kdt shows the parameters and quality the tree was built with") {
+    const fs::path dir = fresh_temp_dir("cli-report-tree");
+    const std::string room = (source_dir() / "testdata" / "cornell" / "room.obj").string();
+    const fs::path tree_file = dir / "room.kdt";
+    const CommandResult built =
+        run_kdray({"build", room, "--json", "-o", tree_file.string(), "--quality", "medium",
+                   "--empty-bonus", "0.3", "--tree-depth", "40"},
+                  300);
+    REQUIRE_MESSAGE(built.status == 0, built.err);
+    const nlohmann::json at_build = nlohmann::json::parse(built.out);
+    const CommandResult read = run_kdray({"stats", "--json", tree_file.string()}, 120);
+    REQUIRE_MESSAGE(read.status == 0, read.err);
+    const nlohmann::json tree = nlohmann::json::parse(read.out)["tree"];
+    CHECK(tree["quality"] == "medium");
+    CHECK(tree["quality"] == at_build["quality"]);
+    nlohmann::json params = at_build["params"];
+    params.erase("small_stage");  // not kept: they shape the build, not the tree
+    params.erase("large_stage");
+    CHECK(tree["params"] == params);
+    CHECK(tree["params"]["tree_depth"] == 40);
+    CHECK(tree["sah_cost"].get<double>() == doctest::Approx(at_build["sah_cost"].get<double>()));
+    // And in the text, under its group.
+    const CommandResult text = run_kdray({"stats", tree_file.string()}, 120);
+    REQUIRE(text.status == 0);
+    CHECK(group_rows(text.out, "parameters").at("empty bonus") == "0.3");
+    CHECK(group_rows(text.out, "tree").at("quality") == "medium");
+    fs::remove_all(dir);
+}
