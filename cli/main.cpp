@@ -373,7 +373,22 @@ int main(int argc, char** argv) {
                             !near.empty())
                             hint = "unknown option '" + arg + "'" + near;
                 }
-        print_error((hint.empty() ? std::string(e.what()) : hint) + " (see kdray --help)");
+        // CLI11 names an option by its first name: one typed by its alias (`--camera`,
+        // `--large-threshold`) is named as typed.
+        std::string message = e.what();
+        for (const CLI::App* sub : {build_app, render_app, stats_app, compare_app})
+            if (sub->parsed())
+                for (int i = 2; i < argc; ++i) {
+                    std::string arg = argv[i];
+                    arg = arg.substr(0, arg.find('='));
+                    const CLI::Option* o =
+                        arg.rfind("--", 0) == 0 ? sub->get_option_no_throw(arg) : nullptr;
+                    if (!o || o->get_lnames().empty()) continue;
+                    const std::string first = "--" + o->get_lnames()[0];
+                    if (first != arg && message.rfind(first + ":", 0) == 0)
+                        message = arg + message.substr(first.size());
+                }
+        print_error((hint.empty() ? message : hint) + " (see kdray --help)");
         return 2;
     }
 
