@@ -72,7 +72,7 @@ int run_build(const BuildCommand& command) {
         for (const std::string& warning : built.report.warnings) print_warning(warning);
         nlohmann::json table = {{"scene", report["scene"]}, {"tree", report}};
         table["tree"].erase("scene");
-        print_table(std::cout, table);
+        print_grouped(std::cout, table);
     }
     return 0;
 }

@@ -20,6 +20,7 @@
 #include "cli/frame_selection.h"
 #include "cli/inputs.h"
 #include "cli/log.h"
+#include "cli/output_target.h"
 #include "core/error.h"
 #include "core/render/render_file.h"
 #include "core/render/render_setup.h"
@@ -29,14 +30,16 @@
 namespace kdray::cli {
 namespace {
 
-/// The frame options the command line gives: output folder, names and format, --aov,
-/// --intersect, --packets; and the clock of compilation that a frame's compile_ms reads.
-FrameOptions frame_options(const RenderCommand& command, const OutputName& name) {
+/// The frame options the command line gives: output folder, names and format (-o, --name,
+/// --format: `target`), --aov, --intersect, --packets; and the clock of compilation that a
+/// frame's compile_ms reads.
+FrameOptions frame_options(const RenderCommand& command, const OutputTarget& target,
+                           const OutputName& name) {
     FrameOptions options;
     options.name = name;
     options.compile_ms_so_far = compile_ms_total;
-    options.out_dir = command.output_dir;
-    options.format = command.format;
+    options.out_dir = target.dir;
+    options.format = target.format;
     options.aov = command.aov;
     options.heatmap = command.heatmap;
     options.intersect =
@@ -53,7 +56,7 @@ FrameOptions frame_options(const RenderCommand& command, const OutputName& name)
 /// system (macOS, Windows shares) would.
 void check_output_names(const std::vector<std::string>& inputs,
                         const std::vector<std::size_t>& selected, const OutputName& output_name,
-                        const RenderCommand& command) {
+                        const RenderCommand& command, const OutputTarget& target) {
     std::map<std::string, std::size_t> writer;
     auto lower = [](std::string s) {
         std::transform(s.begin(), s.end(), s.begin(),
@@ -62,7 +65,7 @@ void check_output_names(const std::vector<std::string>& inputs,
     };
     for (const std::size_t i : selected) {
         const std::string stem = output_name(inputs[i], i);
-        std::vector<std::string> names = {stem + "." + command.format};
+        std::vector<std::string> names = {stem + "." + target.format};
         if (command.aov) names.push_back(stem + ".aov.exr");
         if (command.heatmap) names.push_back(stem + ".cost.png");
         for (const std::string& name : names) {
@@ -70,7 +73,7 @@ void check_output_names(const std::vector<std::string>& inputs,
             if (!fresh)
                 throw UsageError("inputs '" + inputs[it->second] + "' and '" + inputs[i] +
                                  "' would both write " +
-                                 (std::filesystem::path(command.output_dir) / name).string() +
+                                 (std::filesystem::path(target.dir) / name).string() +
                                  "; render them into different folders");
         }
     }
@@ -240,8 +243,10 @@ int run_render(const RenderCommand& command) {
                          std::to_string(inputs.size()) + " inputs");
     if (!past.empty() && command.strict) throw Error("--strict: " + past);
     if (!past.empty()) spdlog::warn("{}", past);
-    const OutputName output_name(command.name);
-    check_output_names(inputs, selected, output_name, command);
+    const OutputTarget target = output_target(command, command.format_given);
+    check_one_frame(target, command.output_dir, selected.size(), inputs.size());
+    const OutputName output_name(target.name);
+    check_output_names(inputs, selected, output_name, command, target);
     RenderSettings& settings = run_settings.render;
     if (!command.render_file.empty()) settings = load_render_file(command.render_file);
     const nlohmann::json overrides = apply_overrides(command, settings);
@@ -258,7 +263,8 @@ int run_render(const RenderCommand& command) {
     run_settings.selected = std::move(selected);
     run_settings.render_file = command.render_file;
     run_settings.overrides = overrides;
-    run_settings.frame = frame_options(command, output_name);
+    run_settings.frame = frame_options(command, target, output_name);
+    run_settings.folder_stats = !target.file || command.stats_json;
     run_settings.skip_existing = command.skip_existing;
     run_settings.keep_going = command.keep_going;
     run_settings.warm_up = command.warm_up;

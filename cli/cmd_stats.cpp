@@ -37,7 +37,7 @@ nlohmann::json defaults_json(const BuilderOptions& o) {
             {"small_stage", small_stage_name(p.small_stage)},
             {"large_stage", large_stage_name(p.large_stage)},
             {"empty_bonus", p.empty_bonus},
-            {"max_depth", p.max_depth}};
+            {"tree_depth", p.max_depth}};
 }
 
 /// A render folder's stats.json, read and checked.
@@ -70,6 +70,12 @@ nlohmann::json path_json(const std::string& path, TreeBuilder& builder) {
     nlohmann::json tree = to_json(
         compute_tree_stats(file.tree, std::size_t(file.scene_triangles), file.tree.params.costs));
     tree["builder"] = file.tree.builder;
+    // How it was built: the parameters the file keeps, and the ladder's name for them. The
+    // stages shape the build, not the tree, and the file does not keep them.
+    tree["params"] = params_json(file.tree);
+    tree["params"].erase("small_stage");
+    tree["params"].erase("large_stage");
+    if (file.tree.builder == "opencl") tree["quality"] = build_quality_of(file.tree.params);
     return {{"tree_file", {{"path", path}, {"scene", file.scene_path}}}, {"tree", tree}};
 }
 
@@ -100,11 +106,21 @@ int run_stats(const StatsCommand& command) {
     }
     if (command.json) {
         std::cout << json_text(out) << "\n";
-    } else if (out.contains("items")) {
-        for (const auto& item : out["items"]) print_table(std::cout, item);
-        if (out.contains("combined")) print_table(std::cout, {{"combined", out["combined"]}});
-    } else {
+    } else if (command.paths.empty()) {
         print_table(std::cout, out);
+    } else {
+        for (std::size_t i = 0; i < command.paths.size(); ++i) {
+            const nlohmann::json& item = command.paths.size() == 1 ? out : out["items"][i];
+            if (i > 0) std::cout << '\n';
+            // A folder's frames one per line, above its summary.
+            if (item.contains("render"))
+                print_frame_table(std::cout, folder_stats(command.paths[i]));
+            print_grouped(std::cout, item);
+        }
+        if (out.contains("combined")) {
+            std::cout << "\nall the folders together\n";
+            print_grouped(std::cout, {{"combined", out["combined"]}});
+        }
     }
     return 0;
 }

@@ -17,7 +17,8 @@ struct BuilderOptions {
     std::string device;              // index or name substring; empty: first GPU, else first device
     BuildParams params;              // the ladder's three below come from the quality
     std::string quality;             // low, medium, high; empty: the command's default
-    // Set by the user apart from the quality (--large-bins, --reclip-refs, --leaf-refs).
+    // Set by the user apart from the quality (--large-split-bins, --small-reclip-refs,
+    // --small-leaf-refs).
     std::optional<int> large_split_bins, small_reclip_refs, small_leaf_refs;
     std::string small_stage = "auto";  // --small-stage: small_stage_name's names (main.cpp checks)
     std::string large_stage = "auto";  // --large-stage: large_stage_name's names (main.cpp checks)
@@ -48,7 +49,9 @@ struct RenderCommand {
     bool aov = false;
     bool heatmap = false;  // <stem>.cost.png: the centre rays' walk cost in false colour
     std::string format = "png";
+    bool format_given = false;    // --format was on the command line (cli/output_target.h)
     std::string name = "{stem}";  // a frame's file names (core/io/output_name.h)
+    bool stats_json = false;      // -o FILE: merge into stats.json beside it all the same
     bool skip_existing = false;   // render only the frames whose files are missing
     std::string tracer = "opencl";
     int threads = 0;

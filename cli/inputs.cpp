@@ -21,7 +21,7 @@ void check_scene_input(const std::string& path) {
     };
     // A render file among the frames read as an OBJ said "unknown statement '{'".
     if (ends_with(".json"))
-        throw UsageError(path + " is a render file, not a scene: pass it with --camera");
+        throw UsageError(path + " is a render file, not a scene: pass it with --render-file");
     if (ends_with(".obj.gz") || ends_with(".obj.zst") || ends_with(".obj.xz") ||
         ends_with(".obj.bz2"))
         throw UsageError(path +

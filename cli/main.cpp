@@ -44,8 +44,10 @@ const CLI::Validator kFiniteNumber(
     },
     "FINITE");
 
-/// The tree's options (group "Tree") and the device's ("Device"). `--max-depth` is refused with
-/// the names that replace it: on render it read as the ray depth and set the tree's.
+/// The tree's options (group "Tree") and the device's ("Device"). Each option is named as its
+/// key in stats.json's "params" (`--large-node-threshold`, large_node_threshold), the short name
+/// it had before kept as an alias. `--max-depth` is refused with the names that replace it: on
+/// render it read as the ray depth and set the tree's.
 void add_builder_options(CLI::App& app, BuilderOptions& o) {
     app.option_defaults()->group("Device");
     app.add_option("--device", o.device,
@@ -56,22 +58,30 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
     app.add_option("--builder", o.builder, "kd-tree builder")
         ->check(CLI::IsMember({"opencl", "reference"}))
         ->capture_default_str();
-    app.add_option("--ct", o.params.costs.traversal, "SAH cost of a traversal step, C_t")
+    app.add_option("--cost-traversal,--ct", o.params.costs.traversal,
+                   "SAH cost of a traversal step, C_t")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
-    app.add_option("--ci", o.params.costs.intersection, "SAH cost of a triangle test, C_i")
+    app.add_option("--cost-intersection,--ci", o.params.costs.intersection,
+                   "SAH cost of a triangle test, C_i")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
-    app.add_option("--large-threshold", o.params.large_node_threshold,
+    app.add_option("--large-node-threshold,--large-threshold", o.params.large_node_threshold,
                    "OpenCL builder: nodes with more triangles are 'large' (empty-space cuts, then "
                    "a binned-SAH or median split); the rest get the full SAH (Zhou et al.'s T, "
                    "at most " +
                        std::to_string(KDRAY_SMALL_ROOT_MAX_REFS) + ")")
         ->check(CLI::Range(1, KDRAY_SMALL_ROOT_MAX_REFS))
         ->capture_default_str();
-    app.add_option("--empty-ratio", o.params.empty_space_ratio,
+    app.add_option("--empty-space-ratio,--empty-ratio", o.params.empty_space_ratio,
                    "OpenCL builder: cut off empty space larger than this share of a large "
                    "node's extent (Zhou et al.'s C_e)")
+        ->check(CLI::Range(0.0f, 1.0f))
+        ->capture_default_str();
+    app.add_option("--empty-bonus", o.params.empty_bonus,
+                   "a split with an empty side has its SAH cost scaled by (1 - this), in "
+                   "[0, 1): both builders")
+        ->check(kFiniteNumber)
         ->check(CLI::Range(0.0f, 1.0f))
         ->capture_default_str();
     app.add_option("--quality", o.quality,
@@ -81,16 +91,16 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
                        " for a render of several frames, else " +
                        kdray::build_quality_name(kdray::kStaticBuildQuality))
         ->check(CLI::IsMember({"low", "medium", "high"}));
-    app.add_option("--large-bins", o.large_split_bins,
+    app.add_option("--large-split-bins,--large-bins", o.large_split_bins,
                    "OpenCL builder: split a large node at the cheapest by the SAH of this many "
                    "bins per axis of its tight box; 0: at the spatial median (Zhou et al.). "
                    "Default: by --quality")
         ->check(CLI::Range(0, kdray::kMaxLargeSplitBins));
-    app.add_option("--reclip-refs", o.small_reclip_refs,
+    app.add_option("--small-reclip-refs,--reclip-refs", o.small_reclip_refs,
                    "OpenCL builder: a small node of at most this many triangles re-clips those "
                    "reaching past its box before its SAH search (0: never). Default: by --quality")
         ->check(CLI::Range(0, int(KDRAY_RECLIP_REFS)));
-    app.add_option("--leaf-refs", o.small_leaf_refs,
+    app.add_option("--small-leaf-refs,--leaf-refs", o.small_leaf_refs,
                    "OpenCL builder: a small node of at most this many triangles is a leaf "
                    "without an SAH search (0: search every node). Default: by --quality")
         ->check(CLI::Range(0, KDRAY_SMALL_ROOT_MAX_REFS));
@@ -108,7 +118,9 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
                    "or auto (level on a GPU, else chunked)")
         ->check(CLI::IsMember({"auto", "chunked", "level"}))
         ->capture_default_str();
-    app.add_option("--tree-depth", o.params.max_depth, "deepest kd-tree level")
+    app.add_option("--tree-depth", o.params.max_depth,
+                   "the kd-tree's depth limit (stats: params.tree_depth; the depth a tree "
+                   "reached is tree_depth_reached)")
         ->check(CLI::Range(1, KDRAY_MAX_DEPTH))
         ->capture_default_str();
     app.add_option("--max-depth", o.retired_max_depth)->group("");  // refused after parsing
@@ -196,8 +208,9 @@ int main(int argc, char** argv) {
     render_app->add_option("frames", render.inputs, "OBJ frames (files or globs), natural order")
         ->required();
     render_app->option_defaults()->group("Image");
-    render_app->add_option("--camera", render.render_file,
-                           "render file (JSON, see conventions); default: frame the scene");
+    render_app->add_option("--render-file,--camera", render.render_file,
+                           "render file (JSON, see conventions): camera, image, integrator, "
+                           "lights; --camera is its old name. Default: frame the scene");
     render_app->add_option("--spp", render.spp, "samples per pixel (overrides the render file)")
         ->check(CLI::Range(1, 65536));
     render_app->add_option("--size", render.size,
@@ -211,11 +224,19 @@ int main(int argc, char** argv) {
                            "in stops: radiance x 2^STOPS before the image is written, from -64 to "
                            "64 (overrides the render file)");
     render_app->option_defaults()->group("Output");
-    render_app->add_option("-o,--output", render.output_dir, "output folder")->required();
+    render_app
+        ->add_option("-o,--output", render.output_dir,
+                     "output folder (DIR/, an existing folder, or a name without an image "
+                     "extension), or one frame's image file FILE.png|.jpg|.tif|.exr, its "
+                     "extension picking the format: its AOV and heat map go beside it as "
+                     "FILE-stem.aov.exr and FILE-stem.cost.png, and no stats.json unless "
+                     "--stats-json")
+        ->required();
     render_app
         ->add_option("--name", render.name,
                      "a frame's file names, from {stem} (the OBJ's name), {frame} and "
-                     "{frame:04} (its number, zero-padded), e.g. frame_{frame:04}")
+                     "{frame:04} (its number, zero-padded), e.g. frame_{frame:04}; an image "
+                     "extension (shot.jpg) picks the format")
         ->capture_default_str();
     render_app->add_flag("--skip-existing", render.skip_existing,
                          "render only the frames whose image (and AOV) are not in the folder yet; "
@@ -226,8 +247,13 @@ int main(int argc, char** argv) {
                          "also write <stem>.cost.png: each centre ray's kd-tree walk cost "
                          "(C_t x nodes + C_i x triangles) in false colour (viridis), from 0 "
                          "to the 99th percentile of the rays that enter the tree");
-    render_app->add_option("--format", render.format, "image format")
-        ->check(CLI::IsMember({"png", "exr"}))
+    render_app->add_flag("--stats-json", render.stats_json,
+                         "with -o FILE: merge the run into stats.json in FILE's folder too, as "
+                         "a folder's run always does");
+    render_app
+        ->add_option("--format", render.format,
+                     "image format: png, jpg, tif (8-bit sRGB) or exr (linear float)")
+        ->check(CLI::IsMember({"png", "exr", "jpg", "tif"}))
         ->capture_default_str();
     render_app->option_defaults()->group("Tracer");
     render_app->add_option("--tracer", render.tracer, "ray tracer")
@@ -337,11 +363,27 @@ int main(int argc, char** argv) {
                             !near.empty())
                             hint = "unknown option '" + arg + "'" + near;
                 }
-        print_error((hint.empty() ? std::string(e.what()) : hint) + see_help());
+        // CLI11 names an option by its first name: one typed by its alias (`--camera`,
+        // `--large-threshold`) is named as typed.
+        std::string message = e.what();
+        for (const CLI::App* sub : {build_app, render_app, stats_app, compare_app})
+            if (sub->parsed())
+                for (int i = 2; i < argc; ++i) {
+                    std::string arg = argv[i];
+                    arg = arg.substr(0, arg.find('='));
+                    const CLI::Option* o =
+                        arg.rfind("--", 0) == 0 ? sub->get_option_no_throw(arg) : nullptr;
+                    if (!o || o->get_lnames().empty()) continue;
+                    const std::string first = "--" + o->get_lnames()[0];
+                    if (first != arg && message.rfind(first + ":", 0) == 0)
+                        message = arg + message.substr(first.size());
+                }
+        print_error((hint.empty() ? message : hint) + see_help());
         return 2;
     }
 
     init_logging(log_level.value_or(*render_app && render.quiet ? "quiet" : "info"));
+    render.format_given = render_app->count("--format") > 0;
     log_kernel_compiles();
 
     for (const BuilderOptions* o : {&build.builder, &render.builder, &stats.builder})

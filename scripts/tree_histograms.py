@@ -53,7 +53,7 @@ def main():
             j = run_json([args.kdray, "build", obj, "--json", "--quality", quality])
             rows.append({"scene": display_name(obj),
                          "quality": quality, "triangles": j["triangles"], "leaves": j["leaves"],
-                         "sah_cost": j["sah_cost"], "max_depth": j["max_depth"],
+                         "sah_cost": j["sah_cost"], "tree_depth_reached": j.get("tree_depth_reached", j.get("max_depth")),
                          "leaf_size_histogram": j["leaf_size_histogram"],
                          "leaf_depth_histogram": j["leaf_depth_histogram"]})
     write_json(args.out + ".json", {**run_record(args.kdray), "rows": rows})

@@ -89,7 +89,8 @@ TEST_CASE("kdray build --json reports the tree the reference builder makes in-pr
                                  (dir / "scene.kdt").string()});
     REQUIRE_MESSAGE(r.status == 0, r.err);
     nlohmann::json j = nlohmann::json::parse(r.out);
-    for (const char* key : {"nodes", "leaves", "sah_cost", "build_ms", "timings_ms", "max_depth"})
+    for (const char* key :
+         {"nodes", "leaves", "sah_cost", "build_ms", "timings_ms", "tree_depth_reached"})
         CHECK_MESSAGE(j.contains(key), key);
     // Beside the build: the load, and a preparation that builds no program (the reference).
     CHECK(j["load_ms"].get<double>() > 0.0);
@@ -217,7 +218,8 @@ TEST_CASE("render overrides --spp, --size and --ray-depth; --max-depth is refuse
     CHECK(stats["image"]["width"] == 16);
     CHECK(stats["image"]["height"] == 8);
     CHECK(stats["image"]["spp"] == 2);
-    CHECK(stats["max_depth"] == 1);
+    CHECK(stats["ray_depth"] == 1);
+    CHECK_FALSE(stats.contains("max_depth"));  // one name per depth
     CHECK(stats["overrides"]["size"] == "16x8");
     CHECK(stats["overrides"]["spp"] == 2);
     CHECK(stats["overrides"]["ray_depth"] == 1);
@@ -265,7 +267,7 @@ TEST_CASE(
         REQUIRE_MESSAGE(deep.status == 0, deep.err);
 
         const nlohmann::json one = read_json(dir / "shallow" / "stats.json");
-        CHECK(one["max_depth"] == 1);
+        CHECK(one["ray_depth"] == 1);
         CHECK(one["overrides"]["ray_depth"] == 1);
         const nlohmann::json& one_rays = one["frames"][0]["rays"];
         CHECK(one_rays["reflection"] == 0);
@@ -273,7 +275,7 @@ TEST_CASE(
         CHECK(one_rays["primary"] == (2 + 1) * 16 * 12);
 
         const nlohmann::json six = read_json(dir / "deep" / "stats.json");
-        CHECK(six["max_depth"] == 6);  // the render file's
+        CHECK(six["ray_depth"] == 6);  // the render file's
         CHECK_FALSE(six["overrides"].contains("ray_depth"));
         const nlohmann::json& six_rays = six["frames"][0]["rays"];
         CHECK(six_rays["reflection"].get<long long>() > 0);
@@ -329,9 +331,12 @@ TEST_CASE("--tree-depth limits the depth of the tree both builders save; the tre
         CHECK(limited_depth <= 3);
         CHECK(limited_depth >= 1);  // the room is split at all
         CHECK(free_depth > 3);
-        CHECK(limited["params"]["max_depth"] == 3);
-        CHECK(limited["max_depth"] == limited_depth);
-        CHECK(free["max_depth"] == free_depth);
+        CHECK(limited["params"]["tree_depth"] == 3);
+        CHECK(limited["tree_depth_reached"] == limited_depth);
+        CHECK(free["tree_depth_reached"] == free_depth);
+        // One name per depth: the limit, the depth reached, never "max_depth".
+        CHECK_FALSE(limited.contains("max_depth"));
+        CHECK_FALSE(limited["params"].contains("max_depth"));
         CHECK(check_tree(limited_tree, scene).empty());
         fs::remove_all(dir);
     }
@@ -364,14 +369,16 @@ TEST_CASE("render --help lists its options under their groups, each group once")
     }
     for (const auto& [name, count] : headings) CHECK_MESSAGE(count == 1, name);
     const std::map<std::string, std::vector<std::string>> expected = {
-        {"Image", {"--camera", "--spp", "--size", "--ray-depth", "--exposure"}},
-        {"Output", {"--output", "--name", "--skip-existing", "--aov", "--format", "--quiet"}},
+        {"Image", {"--render-file", "--camera", "--spp", "--size", "--ray-depth", "--exposure"}},
+        {"Output",
+         {"--output", "--name", "--skip-existing", "--aov", "--format", "--stats-json", "--quiet"}},
         {"Tracer", {"--tracer", "--threads", "--intersect", "--packets"}},
         {"Frames", {"--frames", "--shard"}},
         {"Device", {"--device"}},
         {"Tree",
-         {"--builder", "--ct", "--ci", "--quality", "--large-threshold", "--small-stage",
-          "--large-stage", "--tree-depth"}}};
+         {"--builder", "--cost-traversal", "--ct", "--cost-intersection", "--ci", "--quality",
+          "--large-node-threshold", "--large-threshold", "--empty-space-ratio", "--empty-bonus",
+          "--small-leaf-refs", "--leaf-refs", "--small-stage", "--large-stage", "--tree-depth"}}};
     for (const auto& [name, options] : expected)
         for (const std::string& option : options) {
             CAPTURE(option);

@@ -96,7 +96,7 @@ TEST_CASE("a render file or another scene format given as a scene is told what k
     const fs::path dir = fresh_temp_dir("messages-formats");
     const fs::path json = write_text_file(dir / "shot.json", kSmallRender);
     check_error(render(json, dir / "o", {}), 2,
-                {json.string() + " is a render file, not a scene: pass it with --camera"});
+                {json.string() + " is a render file, not a scene: pass it with --render-file"});
     // Also inside a glob's matches, and for build.
     write_text_file(dir / "frames" / "f_0.obj", kTriangle);
     write_text_file(dir / "frames" / "cam.json", kSmallRender);

@@ -382,11 +382,16 @@ TEST_CASE("NaN and overflowing build parameters are usage errors, on every comma
                                                    {"--ci", "1e39"},
                                                    {"--empty-ratio", "nan"},
                                                    {"--ci", "nan"},
-                                                   {"--large-threshold", "0"}}) {
+                                                   {"--large-threshold", "0"},
+                                                   {"--cost-traversal", "nan"},
+                                                   {"--empty-space-ratio", "nan"},
+                                                   {"--empty-bonus", "nan"},
+                                                   {"--empty-bonus", "1"}}) {
         INFO(option[0] << " " << option[1]);
         std::vector<std::string> args = {"build", tri.string(), option[0], option[1]};
         const CommandResult r = run_kdray(args);
         CHECK(r.status == 2);
+        // An alias (--large-threshold, --ct) is named as typed.
         CHECK(r.err.find(option[0]) != std::string::npos);
     }
     fs::remove_all(dir);

@@ -68,7 +68,7 @@ TEST_CASE("max_depth and --ray-depth above the renderer's 16 bounces are refused
         const CommandResult r = render(q, extra);
         INFO("stderr: " << r.err);
         REQUIRE(r.status == 0);
-        CHECK(read_json(q.dir / "out" / "stats.json")["max_depth"] == 16);
+        CHECK(read_json(q.dir / "out" / "stats.json")["ray_depth"] == 16);
         fs::remove_all(q.dir / "out");
     }
     fs::remove_all(deep.dir);

@@ -152,6 +152,32 @@ TEST_CASE("a PNG keeps every 8-bit value, and OpenImageIO reads the same bytes")
     CHECK(read == pixels);
 }
 
+TEST_CASE("a TIFF keeps every 8-bit value and a JPEG stays near them, as OpenImageIO reads them") {
+    // A smooth gradient: JPEG's blocks keep it to a few steps, where noise would not survive.
+    std::vector<std::uint8_t> pixels(3 * kPixels);
+    for (std::size_t i = 0; i < kPixels; ++i)
+        for (int c = 0; c < 3; ++c) pixels[3 * i + c] = std::uint8_t(40 + 20 * c + 4 * i);
+    for (const std::string format : {"tif", "jpg"}) {
+        CAPTURE(format);
+        if (format == "tif" && std::string(image_codec_name()) == "small") {
+            CHECK_THROWS_WITH_AS(encode_rgb8(format, kWidth, kHeight, pixels),
+                                 doctest::Contains("KDRAY_IMAGE_CODEC=oiio"), Error);
+            continue;
+        }
+        const fs::path path = temp_file("image." + format);
+        write_bytes(path, encode_rgb8(format, kWidth, kHeight, pixels));
+        auto in = OIIO::ImageInput::open(path.string());
+        REQUIRE(in);
+        CHECK(std::string(in->format_name()) == (format == "tif" ? "tiff" : "jpeg"));
+        CHECK(in->spec().width == kWidth);
+        CHECK(in->spec().height == kHeight);
+        std::vector<std::uint8_t> read(pixels.size());
+        REQUIRE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, read.data()));
+        for (std::size_t i = 0; i < pixels.size(); ++i)
+            CHECK(std::abs(int(read[i]) - int(pixels[i])) <= (format == "tif" ? 0 : 6));
+    }
+}
+
 TEST_CASE("files OpenImageIO writes (8-bit grey PNG, half-float EXR) read as it wrote them") {
     // A grey PNG: one channel, as a texture may be.
     std::vector<std::uint8_t> grey(kPixels);

@@ -355,7 +355,7 @@ TEST_CASE("kdray render: the path integrator in stats.json, --ray-depth in its r
         REQUIRE(r.status == 0);
         const nlohmann::json stats = test::read_json(dir / "out" / "stats.json");
         CHECK(stats["integrator"] == "path");
-        CHECK(stats["max_depth"] == -1);
+        CHECK(stats["ray_depth"] == -1);
         const nlohmann::json& effects = stats["frames"][0]["effects"];
         CHECK(effects["path"] == true);
         CHECK(effects["reasons"]["path"] == "the render file asks for \"integrator\": \"path\"");
@@ -365,7 +365,7 @@ TEST_CASE("kdray render: the path integrator in stats.json, --ray-depth in its r
     // -1 and depths past Whitted's 16 are the path's alone.
     const test::CommandResult deep = render(path_file, {"--ray-depth", "40"});
     CHECK(deep.status == 0);
-    CHECK(test::read_json(dir / "out" / "stats.json")["max_depth"] == 40);
+    CHECK(test::read_json(dir / "out" / "stats.json")["ray_depth"] == 40);
     test::check_error(render(whitted_file, {"--ray-depth", "-1"}), 2, {"--ray-depth", "16"});
     test::check_error(render(path_file, {"--ray-depth", "0"}), 2, {"--ray-depth", "-1"});
     const nlohmann::json whitted = [&] {

@@ -89,7 +89,7 @@ TEST_CASE("SAH cost of the hand-built tree matches its closed form") {
 
     const nlohmann::json j = to_json(s);
     for (const char* key :
-         {"triangles", "nodes", "inner_nodes", "leaves", "empty_leaves", "max_depth",
+         {"triangles", "nodes", "inner_nodes", "leaves", "empty_leaves", "tree_depth_reached",
           "triangle_references", "references_per_triangle", "mean_triangles_per_leaf", "bytes",
           "sah_cost", "cost_traversal", "cost_intersection"})
         CHECK_MESSAGE(j.contains(key), key);

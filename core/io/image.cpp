@@ -61,6 +61,14 @@ void check_size(const fs::path& path, int width, int height, std::size_t values,
 
 }  // namespace
 
+std::string image_format_of(const fs::path& path) {
+    const std::string ext = lower_extension(path);
+    if (ext == ".png" || ext == ".exr") return ext.substr(1);
+    if (ext == ".jpg" || ext == ".jpeg") return "jpg";
+    if (ext == ".tif" || ext == ".tiff") return "tif";
+    return "";
+}
+
 float display_transform(float linear, DisplayTransform transform) {
     if (!(linear > 0.0f)) return 0.0f;
     if (transform == DisplayTransform::clamp) return std::min(linear, 1.0f);
@@ -90,17 +98,20 @@ void write_aov(const fs::path& path, const HitBuffer& hits) {
 std::string encode_image(const fs::path& path, const Image& image, float exposure_stops,
                          DisplayTransform display) {
     check_size(path, image.width, image.height, image.rgb.size(), 3, "image");
-    const std::string ext = lower_extension(path);
     // conventions.md: every radiance that reaches an image is multiplied by 2^exposure.
     const float scale = std::exp2(exposure_stops);
-    if (ext == ".png") {
+    const std::string format = image_format_of(path);
+    if (format == "png" || format == "jpg" || format == "tif") {
         std::vector<std::uint8_t> pixels(image.rgb.size());
         for (std::size_t i = 0; i < pixels.size(); ++i)
             pixels[i] = std::uint8_t(std::lround(
                 srgb_encode(display_transform(scale * image.rgb[i], display)) * 255.0f));
-        return encoded(path, [&] { return encode_png_rgb8(image.width, image.height, pixels); });
+        return encoded(path, [&] {
+            return format == "png" ? encode_png_rgb8(image.width, image.height, pixels)
+                                   : encode_rgb8(format, image.width, image.height, pixels);
+        });
     }
-    if (ext == ".exr") {
+    if (format == "exr") {
         ExrImage exr{image.width, image.height, {{"R"}, {"G"}, {"B"}}};
         const std::size_t pixels = std::size_t(image.width) * std::size_t(image.height);
         for (int c = 0; c < 3; ++c) {
@@ -116,7 +127,7 @@ std::string encode_image(const fs::path& path, const Image& image, float exposur
         return encoded(path, [&] { return encode_exr(exr); });
     }
     throw Error("cannot write " + path.string() + ": unknown image extension '" +
-                path.extension().string() + "' (use .png or .exr)");
+                path.extension().string() + "' (use .png, .jpg, .tif or .exr)");
 }
 
 std::string encode_aov(const fs::path& path, const HitBuffer& hits) {

@@ -40,9 +40,13 @@ float display_transform(float linear, DisplayTransform transform);
 /// "clamp" or "filmic", as the render file and stats.json spell them.
 const char* display_name(DisplayTransform transform);
 
-/// Writes PNG (sRGB-encoded, 8 bit) or EXR (linear float) by the file's extension, the radiance
-/// multiplied by 2^exposure_stops (conventions.md: PNG display(2^e x radiance), EXR 2^e x
-/// radiance).
+/// The image format a file name's extension picks, as --format names it: "png", "jpg" (.jpg,
+/// .jpeg), "tif" (.tif, .tiff) or "exr", in any case; "" for any other extension.
+std::string image_format_of(const std::filesystem::path& path);
+
+/// Writes PNG, JPEG or TIFF (sRGB-encoded, 8 bit) or EXR (linear float) by the file's extension,
+/// the radiance multiplied by 2^exposure_stops (conventions.md: 8-bit display(2^e x radiance),
+/// EXR 2^e x radiance).
 void write_image(const std::filesystem::path& path, const Image& image, float exposure_stops = 0.0f,
                  DisplayTransform display = DisplayTransform::clamp);
 void write_aov(const std::filesystem::path& path, const HitBuffer& hits);

@@ -55,6 +55,12 @@ const char* image_codec_name();
 /// The PNG file of an 8-bit sRGB image, 3 bytes per pixel (`rgb.size()` is 3 x width x height).
 std::string encode_png_rgb8(int width, int height, const std::vector<std::uint8_t>& rgb);
 
+/// The JPEG (quality 95) or TIFF (8-bit, uncompressed) file of an 8-bit sRGB image, as
+/// encode_png_rgb8; `format` is "jpg" or "tif". Throws Error when the codec cannot write it (the
+/// small codec writes no TIFF).
+std::string encode_rgb8(const std::string& format, int width, int height,
+                        const std::vector<std::uint8_t>& rgb);
+
 /// The EXR file (ZIP-compressed scanlines) of `image`; float32 channels stay float32. The file
 /// lists its channels in name order, as OpenEXR requires; readers find them by name.
 std::string encode_exr(const ExrImage& image);

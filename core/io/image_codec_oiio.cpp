@@ -79,6 +79,21 @@ std::string encode_png_rgb8(int width, int height, const std::vector<std::uint8_
     });
 }
 
+std::string encode_rgb8(const std::string& format, int width, int height,
+                        const std::vector<std::uint8_t>& rgb) {
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    // OpenImageIO 2.4 writes a TIFF tagged sRGB into memory with a broken first directory (no
+    // ImageLength): readers take 8-bit TIFF as sRGB untagged, as they do PNG.
+    if (format != "tif") spec.attribute("oiio:ColorSpace", "sRGB");
+    // Without a DateTime OpenImageIO stamps a TIFF with the time it was written: the same frame
+    // rendered twice must be the same bytes, as its PNG is.
+    spec.attribute("DateTime", "");
+    if (format == "jpg") spec.attribute("Compression", "jpeg:95");
+    return encode("image." + format, spec, [&](OIIO::ImageOutput& out) {
+        return out.write_image(OIIO::TypeDesc::UINT8, rgb.data());
+    });
+}
+
 std::string encode_exr(const ExrImage& image) {
     const int channels = int(image.channels.size());
     OIIO::ImageSpec spec(image.width, image.height, channels, OIIO::TypeDesc::FLOAT);

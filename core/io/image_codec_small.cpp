@@ -1,4 +1,5 @@
-// image_codec_small.cpp — core/io/image_codec.h through Debian's stb (stb_image_write for PNG,
+// image_codec_small.cpp — core/io/image_codec.h through Debian's stb (stb_image_write for PNG
+// and JPEG,
 // stb_image for textures) and tinyexr (EXR), KDRAY_IMAGE_CODEC=small: a dependency closure of a
 // few MiB (zlib) against OpenImageIO's hundreds (boost, ffmpeg, OpenCV, ...), for the device
 // bundle (scripts/device-bundle.sh). Textures: PNG, JPEG, BMP, TGA, GIF, PSD, HDR, PNM and EXR.
@@ -108,6 +109,22 @@ std::string encode_png_rgb8(int width, int height, const std::vector<std::uint8_
     if (!stbi_write_png_to_func(append, &encoded, width, height, 3, rgb.data(), 3 * width))
         throw Error("cannot encode a " + std::to_string(width) + "x" + std::to_string(height) +
                     " PNG image (stb_image_write)");
+    return encoded;
+}
+
+std::string encode_rgb8(const std::string& format, int width, int height,
+                        const std::vector<std::uint8_t>& rgb) {
+    if (format != "jpg")
+        throw Error("cannot encode a " + format +
+                    " image: this kdray's image codec (small: stb and tinyexr) writes PNG, JPEG "
+                    "and EXR only; build with KDRAY_IMAGE_CODEC=oiio for TIFF");
+    std::string encoded;
+    auto append = [](void* context, void* data, int size) {
+        static_cast<std::string*>(context)->append(static_cast<const char*>(data), size);
+    };
+    if (!stbi_write_jpg_to_func(append, &encoded, width, height, 3, rgb.data(), 95))
+        throw Error("cannot encode a " + std::to_string(width) + "x" + std::to_string(height) +
+                    " JPEG image (stb_image_write)");
     return encoded;
 }
 

@@ -44,16 +44,18 @@ void check_host_memory(const RenderRunSettings& settings) {
 
 /// The frames of `selected` that an earlier run into the folder completed (a record in its
 /// stats.json, no failure since) and whose files are all there: what --skip-existing skips. A
-/// frame whose image a killed run left without a record is rendered again.
+/// frame whose image a killed run left without a record is rendered again. Without a stats.json
+/// (`records` false), the files alone.
 std::vector<std::size_t> frames_done(const std::vector<std::string>& inputs,
                                      const std::vector<std::size_t>& selected,
-                                     const nlohmann::json& previous, const FrameOptions& frame) {
+                                     const nlohmann::json& previous, bool records,
+                                     const FrameOptions& frame) {
     const std::set<std::string> completed = completed_images(previous);
     std::vector<std::size_t> done;
     const std::filesystem::path& dir = frame.out_dir;
     for (const std::size_t i : selected) {
         const std::string stem = frame.name(inputs[i], i);
-        if (completed.count(stem + "." + frame.format) == 0) continue;
+        if (records && completed.count(stem + "." + frame.format) == 0) continue;
         std::error_code ec;
         bool present = std::filesystem::is_regular_file(dir / (stem + "." + frame.format), ec);
         if (frame.aov)
@@ -86,10 +88,11 @@ RenderRun::RenderRun(RenderRunSettings settings, RenderRunObserver& observer)
     const std::filesystem::path& out_dir = settings_.frame.out_dir;
     // The run's frames merge into the folder's stats.json: one that cannot be merged into fails
     // the run before it renders.
-    const nlohmann::json previous = read_folder_stats(out_dir);
+    const bool records = settings_.folder_stats;
+    const nlohmann::json previous = records ? read_folder_stats(out_dir) : nlohmann::json();
     if (settings_.skip_existing) {
         const std::vector<std::size_t> done =
-            frames_done(settings_.inputs, selected_, previous, settings_.frame);
+            frames_done(settings_.inputs, selected_, previous, records, settings_.frame);
         if (!done.empty()) {
             observer_.skipping(done.size(), selected_.size());
             std::vector<std::size_t> rest;
@@ -212,7 +215,8 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
         {"render_file", settings_.render_file},
         {"image", {{"width", render.width}, {"height", render.height}, {"spp", render.spp}}},
         {"integrator", integrator_name(render.integrator)},
-        {"max_depth", render.max_depth},
+        // The render file's max_depth, after --ray-depth: one name per depth in stats.json.
+        {"ray_depth", render.max_depth},
         // The 8-bit images' transform (EXR images are linear whatever it is).
         {"display", display_name(render.display)},
         {"overrides", settings_.overrides},
@@ -226,7 +230,7 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
     if (warnings.total() > 0) run["warnings"] = warnings.to_json();
     if (!failures.empty()) run["failed_frames"] = failures;
     if (outcome.interrupted) run["interrupted_after_frames"] = frames.size();
-    if (!frames.empty() || !failures.empty()) {
+    if (settings_.folder_stats && (!frames.empty() || !failures.empty())) {
         // Other runs into the folder (shards, earlier runs) keep their records.
         const FolderMerge merge = merge_into_folder(out_dir, std::move(run));
         if (!merge.locked) observer_.merged_without_lock(merge.lock_problem);

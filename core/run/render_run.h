@@ -38,6 +38,9 @@ struct RenderRunSettings {
     nlohmann::json overrides;    // what the overrides set (stats.json's "overrides")
     FrameOptions frame;          // the output folder, the files' names and format, the AOV, ...
     bool skip_existing = false;  // leave out the frames the folder holds already
+    /// Merge the run into the folder's stats.json; false (`render -o FILE` unless --stats-json)
+    /// writes none, and --skip-existing then goes by the files alone.
+    bool folder_stats = true;
     bool keep_going = false;     // render the remaining frames after a bad one
     bool warm_up = false;        // render the first frame once, untimed and unwritten, first
     bool strict = false;         // any warning fails the frame, before it builds where it can

@@ -35,22 +35,12 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
     for (const auto& [stage, ms] : built.report.timings_ms) stages[stage] = ms;
     j["timings_ms"] = stages;
     const BuildParams& p = tree.params;
-    j["params"] = {{"cost_traversal", p.costs.traversal},
-                   {"cost_intersection", p.costs.intersection},
-                   {"max_depth", p.max_depth}};
+    j["params"] = params_json(tree);
     if (tree.builder == "opencl") {
         j["quality"] = build_quality_of(p);
-        j["params"]["large_node_threshold"] = p.large_node_threshold;
-        j["params"]["empty_space_ratio"] = p.empty_space_ratio;
-        j["params"]["large_split_bins"] = p.large_split_bins;
-        j["params"]["small_reclip_refs"] = p.small_reclip_refs;
-        j["params"]["small_leaf_refs"] = p.small_leaf_refs;
-        // What was asked for (auto too), and the shape that ran (per-root or per-level).
-        j["params"]["small_stage"] = small_stage_name(p.small_stage);
+        // What was asked for (params: auto too), and the shape that ran (per-root or per-level).
         if (!built.report.small_stage.empty()) j["small_stage"] = built.report.small_stage;
-        j["params"]["large_stage"] = large_stage_name(p.large_stage);
         if (!built.report.large_stage.empty()) j["large_stage"] = built.report.large_stage;
-        j["params"]["empty_bonus"] = p.empty_bonus;
         j["large_node_levels"] = built.report.large_node_levels;
         j["small_node_levels"] = built.report.small_node_levels;
         j["budget_leaves"] = built.report.budget_leaves;
@@ -62,10 +52,26 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
         if (triangle_count > 0)
             j["device_bytes_per_triangle"] =
                 double(built.report.device_bytes) / double(triangle_count);
-    } else {
-        j["params"]["empty_bonus"] = p.empty_bonus;
     }
     if (!built.report.warnings.empty()) j["warnings"] = built.report.warnings;
+    return j;
+}
+
+nlohmann::json params_json(const KdTree& tree) {
+    const BuildParams& p = tree.params;
+    nlohmann::json j = {{"cost_traversal", p.costs.traversal},
+                        {"cost_intersection", p.costs.intersection},
+                        {"tree_depth", p.max_depth}};
+    if (tree.builder == "opencl") {
+        j["large_node_threshold"] = p.large_node_threshold;
+        j["empty_space_ratio"] = p.empty_space_ratio;
+        j["large_split_bins"] = p.large_split_bins;
+        j["small_reclip_refs"] = p.small_reclip_refs;
+        j["small_leaf_refs"] = p.small_leaf_refs;
+        j["small_stage"] = small_stage_name(p.small_stage);
+        j["large_stage"] = large_stage_name(p.large_stage);
+    }
+    j["empty_bonus"] = p.empty_bonus;
     return j;
 }
 
@@ -98,7 +104,10 @@ nlohmann::json summarise_runs(const std::vector<nlohmann::json>& runs) {
     for (const char* part : parts)
         j["mean_" + std::string(part)] = mean(part_totals[part], numbers.size());
     j["frames_per_second"] = per_second(mean_ms);
-    j["frames_per_second_after_first"] = per_second(mean(after_first_ms, after_first));
+    // No frame after a first: no rate, rather than a rate of 0 that reads as "stalled".
+    j["frames_per_second_after_first"] =
+        after_first > 0 ? nlohmann::json(per_second(mean(after_first_ms, after_first)))
+                        : nlohmann::json(nullptr);
     j["frame_numbers"] = numbers;
     if (std::adjacent_find(numbers.begin(), numbers.end()) != numbers.end())
         j["warning"] = "some frame numbers appear in more than one folder";

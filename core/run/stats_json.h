@@ -17,6 +17,9 @@ namespace kdray {
 nlohmann::json scene_json(const Scene& scene);
 /// Tree statistics (SAH cost with the tree's own C_t and C_i), build parameters and timings.
 nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count);
+/// The parameters `tree` was built with, under their option names (docs/names.md): what
+/// tree_json's "params" holds, and what `kdray stats TREE.kdt` reads back from a tree file.
+nlohmann::json params_json(const KdTree& tree);
 /// Summary of the frame records of one run (stats.json's "frames") or of several (the folders
 /// of an animation's shards), each in the order it rendered them: frames, mean and worst
 /// frame_ms, the mean of each part of a frame (load wait, compile, build, trace, write), frames

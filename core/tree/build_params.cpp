@@ -65,25 +65,28 @@ std::optional<LargeStage> parse_large_stage(std::string_view name) {
 void validate_build_params(const BuildParams& p) {
     const float ct = p.costs.traversal, ci = p.costs.intersection;
     if (!(std::isfinite(ct) && ct >= 0))
-        reject("the SAH cost of a traversal step C_t", "--ct", ct, "a finite number >= 0");
+        reject("the SAH cost of a traversal step C_t", "--cost-traversal/--ct", ct,
+               "a finite number >= 0");
     if (!(std::isfinite(ci) && ci > 0))
-        reject("the SAH cost of a triangle test C_i", "--ci", ci, "a finite number > 0");
+        reject("the SAH cost of a triangle test C_i", "--cost-intersection/--ci", ci,
+               "a finite number > 0");
     if (!(p.empty_bonus >= 0 && p.empty_bonus < 1))
-        reject("the empty-space bonus", "empty_bonus", p.empty_bonus, "in [0, 1)");
+        reject("the empty-space bonus", "--empty-bonus", p.empty_bonus, "in [0, 1)");
     // A large node holds more than T references and a small root at most T, which its masks bound.
     if (p.large_node_threshold < 1 || p.large_node_threshold > KDRAY_SMALL_ROOT_MAX_REFS)
-        reject("the large-node threshold T", "--large-threshold", p.large_node_threshold,
-               integer_rule(1, KDRAY_SMALL_ROOT_MAX_REFS));
+        reject("the large-node threshold T", "--large-node-threshold/--large-threshold",
+               p.large_node_threshold, integer_rule(1, KDRAY_SMALL_ROOT_MAX_REFS));
     if (!(p.empty_space_ratio >= 0 && p.empty_space_ratio <= 1))
-        reject("the empty-space ratio C_e", "--empty-ratio", p.empty_space_ratio, "in [0, 1]");
+        reject("the empty-space ratio C_e", "--empty-space-ratio/--empty-ratio",
+               p.empty_space_ratio, "in [0, 1]");
     if (p.large_split_bins < 0 || p.large_split_bins > kMaxLargeSplitBins)
-        reject("the large-node SAH bins", "--large-bins", p.large_split_bins,
+        reject("the large-node SAH bins", "--large-split-bins/--large-bins", p.large_split_bins,
                integer_rule(0, kMaxLargeSplitBins));
     if (p.small_reclip_refs < 0 || p.small_reclip_refs > int(KDRAY_RECLIP_REFS))
-        reject("the small-node re-clip size", "--reclip-refs", p.small_reclip_refs,
-               integer_rule(0, int(KDRAY_RECLIP_REFS)));
+        reject("the small-node re-clip size", "--small-reclip-refs/--reclip-refs",
+               p.small_reclip_refs, integer_rule(0, int(KDRAY_RECLIP_REFS)));
     if (p.small_leaf_refs < 0 || p.small_leaf_refs > KDRAY_SMALL_ROOT_MAX_REFS)
-        reject("the small-node leaf size", "--leaf-refs", p.small_leaf_refs,
+        reject("the small-node leaf size", "--small-leaf-refs/--leaf-refs", p.small_leaf_refs,
                integer_rule(0, KDRAY_SMALL_ROOT_MAX_REFS));
     if (p.max_depth < 0 || p.max_depth > KDRAY_MAX_DEPTH)
         reject("the tree depth limit", "--tree-depth", p.max_depth,

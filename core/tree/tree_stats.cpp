@@ -96,7 +96,7 @@ nlohmann::json to_json(const TreeStats& stats) {
         {"inner_nodes", stats.inner_nodes},
         {"leaves", stats.leaves},
         {"empty_leaves", stats.empty_leaves},
-        {"max_depth", stats.max_depth},
+        {"tree_depth_reached", stats.max_depth},
         {"triangle_references", stats.triangle_references},
         {"references_per_triangle", stats.references_per_triangle},
         {"mean_triangles_per_leaf", stats.mean_triangles_per_leaf},
