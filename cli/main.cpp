@@ -209,7 +209,7 @@ int main(int argc, char** argv) {
         ->required();
     render_app->option_defaults()->group("Image");
     render_app->add_option("--render-file,--camera", render.render_file,
-                           "render file (JSON, see conventions): camera, image, integrator, "
+                           "render file (JSON, docs/conventions.md): camera, image, integrator, "
                            "lights; --camera is its old name. Default: frame the scene");
     render_app->add_option("--spp", render.spp, "samples per pixel (overrides the render file)")
         ->check(CLI::Range(1, 65536));
