@@ -2,8 +2,11 @@
 // (core/run/render_run.h: per frame, load, build, trace and write the image and the hit AOV, then
 // the run merged into OUTDIR/stats.json), with the builder and the tracer it names (cl/backends.h);
 // the run's messages and progress line on stderr, Ctrl-C, and the exit status.
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -19,6 +22,7 @@
 #include "cli/frame_selection.h"
 #include "cli/inputs.h"
 #include "cli/log.h"
+#include "cli/resume_command.h"
 #include "core/error.h"
 #include "core/render/render_file.h"
 #include "core/render/render_setup.h"
@@ -79,10 +83,32 @@ void check_output_names(const std::vector<std::string>& inputs,
 /// whole. A second signal ends the process at once; files are renamed into place only when
 /// complete, so even then no truncated image exists under its final name.
 volatile std::sig_atomic_t interrupted = 0;
+/// Whether stderr is a terminal, read by the handler: a progress line there is cleared first.
+volatile std::sig_atomic_t stderr_terminal = 0;
+
+/// `text` on stderr from a signal handler: write(2) is async-signal-safe, stdio and spdlog are not.
+void say_from_handler(const char* text, std::size_t length) {
+    if (stderr_terminal) (void)!::write(STDERR_FILENO, "\r\033[K", 4);
+    (void)!::write(STDERR_FILENO, text, length);
+}
 
 extern "C" void on_interrupt(int signal) {
-    interrupted = 1;
+    const int saved_errno = errno;
+    if (interrupted == 0) {
+        // Said at once: a frame can trace for minutes, and a silent Ctrl-C reads as ignored.
+        interrupted = 1;
+        constexpr char kStopping[] =
+            "kdray: stopping after this frame; Ctrl-C again to abort now\n";
+        say_from_handler(kStopping, sizeof kStopping - 1);
+        errno = saved_errno;
+        return;
+    }
+    constexpr char kAborted[] = "kdray: aborted\n";
+    say_from_handler(kAborted, sizeof kAborted - 1);
+    // Ended by the signal itself, so that the shell sees what ended it (status 128 + signal).
     std::signal(signal, SIG_DFL);
+    std::raise(signal);
+    errno = saved_errno;
 }
 
 /// The command line's overrides of the render file (--spp, --size, --ray-depth, --exposure)
@@ -274,12 +300,16 @@ int run_render(const RenderCommand& command) {
     log.builder_quality = builder->quality();
     log.tracer = tracer.get();
     // A closed terminal or a killed ssh session (SIGHUP) stops the run as Ctrl-C does.
+    stderr_terminal = stderr_is_terminal() ? 1 : 0;
     for (const int signal : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal, on_interrupt);
 
     const RenderRunOutcome outcome = run.run(*builder, *tracer);
     if (outcome.interrupted) {
-        print_message("kdray: interrupted: ", std::to_string(outcome.rendered) +
-                                                  " frame(s) complete in " + command.output_dir);
+        // The resume command is printed as it is: printable() would cut a long one.
+        print_line_as_is("kdray: interrupted: ",
+                         printable(std::to_string(outcome.rendered) + " frame(s) complete in " +
+                                   command.output_dir) +
+                             "; resume with: " + resume_command(command.command_line));
         return 130;
     }
     if (outcome.failed > 0) {

@@ -37,6 +37,7 @@ struct BuildCommand {
 };
 
 struct RenderCommand {
+    std::vector<std::string> command_line;  // argv as typed: an interrupted run's resume command
     std::vector<std::string> inputs;
     std::string output_dir;
     std::string render_file;

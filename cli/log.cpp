@@ -140,7 +140,10 @@ std::string printable(std::string_view text) {
 }
 
 void print_message(const char* prefix, std::string_view text) {
-    const std::string line = printable(text);
+    print_line_as_is(prefix, printable(text));
+}
+
+void print_line_as_is(const char* prefix, std::string_view line) {
     std::lock_guard<std::mutex> lock(stderr_mutex);
     if (stderr_lost) return;
     // "\r\033[K": back to the start of the progress line and clear it.

@@ -215,6 +215,7 @@ int main(int argc, char** argv) {
     add_builder_options(*build_app, build.builder);
 
     RenderCommand render;
+    render.command_line.assign(argv, argv + argc);
     auto* render_app =
         app.add_subcommand("render", "Build and trace every frame; write images and stats.json");
     render_app->add_option("frames", render.inputs, "OBJ frames (files or globs), natural order")
@@ -243,7 +244,9 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     render_app->add_flag("--skip-existing", render.skip_existing,
                          "render only the frames whose image (and AOV) are not in the folder yet; "
-                         "stats.json keeps the earlier runs' records of the others");
+                         "stats.json keeps the earlier runs' records of the others. Ctrl-C stops "
+                         "after the frame in progress and prints the command that resumes the "
+                         "run (with this option); a second Ctrl-C aborts at once");
     render_app->add_flag("--aov", render.aov,
                          "also write <stem>.aov.exr (Z, prim_id, N, cost.nodes, cost.triangles)");
     render_app->add_flag("--heatmap", render.heatmap,
