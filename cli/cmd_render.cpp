@@ -28,6 +28,8 @@
 #include "core/render/render_setup.h"
 #include "core/run/frame_pipeline.h"
 #include "core/run/render_run.h"
+#include "core/tree/build_quality.h"
+#include "core/tree/reference_builder.h"
 
 namespace kdray::cli {
 namespace {
@@ -284,6 +286,13 @@ int run_render(const RenderCommand& command) {
     run_settings.overrides = overrides;
     run_settings.frame = frame_options(command, output_name);
     run_settings.skip_existing = command.skip_existing;
+    run_settings.other_settings = command.overwrite ? OtherSettings::Overwrite
+                                  : command.mixed   ? OtherSettings::Mixed
+                                                    : OtherSettings::Refuse;
+    const BuildParams build_params = command.builder.build_params(default_quality);
+    run_settings.quality = command.builder.builder == "reference"
+                               ? ReferenceTreeBuilder(build_params).quality()
+                               : build_quality_of(build_params);
     run_settings.keep_going = command.keep_going;
     run_settings.warm_up = command.warm_up;
     RenderLog log(command);
@@ -292,8 +301,8 @@ int run_render(const RenderCommand& command) {
     if (run.frames().empty()) return 0;
 
     DeviceSession session(command.builder.device);
-    const std::unique_ptr<TreeBuilder> builder = make_tree_builder(
-        command.builder.builder, command.builder.build_params(default_quality), session);
+    const std::unique_ptr<TreeBuilder> builder =
+        make_tree_builder(command.builder.builder, build_params, session);
     const std::unique_ptr<Tracer> tracer = make_tracer(command.tracer, command.threads, session);
     log.frames = run.frames().size();
     log.builder = builder.get();

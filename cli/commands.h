@@ -50,6 +50,9 @@ struct RenderCommand {
     std::string format = "png";
     std::string name = "{stem}";  // a frame's file names (core/io/output_name.h)
     bool skip_existing = false;   // render only the frames whose files are missing
+    // The folder's records made with other image settings: replaced, or kept beside (default:
+    // the run refuses).
+    bool overwrite = false, mixed = false;
     std::string tracer = "opencl";
     int threads = 0;
     bool quiet = false;

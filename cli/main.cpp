@@ -247,6 +247,17 @@ int main(int argc, char** argv) {
                          "stats.json keeps the earlier runs' records of the others. Ctrl-C stops "
                          "after the frame in progress and prints the command that resumes the "
                          "run (with this option); a second Ctrl-C aborts at once");
+    auto* overwrite = render_app->add_flag(
+        "--overwrite", render.overwrite,
+        "when the folder's stats.json records frames rendered with other image settings (size, "
+        "spp, ray depth, integrator, exposure, display, build quality, triangle test), which "
+        "refuses the run: replace those records (with --skip-existing, their frames are "
+        "rendered again)");
+    render_app
+        ->add_flag("--mixed", render.mixed,
+                   "... or render beside them into a folder of mixed settings (stats.json's "
+                   "image lists each group's frames)")
+        ->excludes(overwrite);
     render_app->add_flag("--aov", render.aov,
                          "also write <stem>.aov.exr (Z, prim_id, N, cost.nodes, cost.triangles)");
     render_app->add_flag("--heatmap", render.heatmap,

@@ -23,6 +23,7 @@
 #include "core/render/tracer.h"
 #include "core/run/frame_loader.h"
 #include "core/run/frame_pipeline.h"
+#include "core/run/image_settings.h"
 #include "core/tree/tree_builder.h"
 
 namespace kdray {
@@ -40,6 +41,11 @@ struct RenderRunSettings {
     bool skip_existing = false;  // leave out the frames the folder holds already
     bool keep_going = false;     // render the remaining frames after a bad one
     bool warm_up = false;        // render the first frame once, untimed and unwritten, first
+    /// Records in the folder made with other image settings (core/run/image_settings.h).
+    OtherSettings other_settings = OtherSettings::Refuse;
+    /// The builder's quality (TreeBuilder::quality), known before the device opens so that the
+    /// folder's records are checked against it; empty: not checked, taken from the builder.
+    std::string quality;
     /// When the run began checking its inputs: stats.json's setup_ms counts from there.
     FrameClock::time_point setup_start = FrameClock::now();
 };
@@ -85,8 +91,10 @@ class RenderRun {
   public:
     /// Checks what can be checked before the device opens, in this order: a frame of the image
     /// size fits in half the host's memory; the output folder's stats.json, when there is one,
-    /// can be merged into; with skip_existing, the frames the folder holds are dropped (the
-    /// observer told how many). Throws Error naming the file or the figures.
+    /// can be merged into and (other_settings Refuse) holds no record made with other image
+    /// settings (UsageError naming them); with skip_existing, the frames the folder holds are
+    /// dropped (with Overwrite, only those recorded with the run's settings; the observer told
+    /// how many). Throws Error naming the file or the figures.
     RenderRun(RenderRunSettings settings, RenderRunObserver& observer);
     ~RenderRun();
 
