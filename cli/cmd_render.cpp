@@ -23,6 +23,7 @@
 #include "cli/inputs.h"
 #include "cli/log.h"
 #include "cli/resume_command.h"
+#include "cli/trace_progress.h"
 #include "core/error.h"
 #include "core/render/render_file.h"
 #include "core/render/render_setup.h"
@@ -234,7 +235,13 @@ class RenderLog final : public RenderRunObserver {
 
     void frame_failed(std::size_t, const Error& e) override { spdlog::error("{}", e.what()); }
 
+    void tracing(std::size_t frame, std::size_t position, std::size_t count, std::uint64_t done,
+                 std::uint64_t total) override {
+        if (trace_log_) trace_progress_.tracing(position, count, frame, done, total, frames_ms_);
+    }
+
     void progress(std::size_t done, std::size_t count, double elapsed_ms) override {
+        frames_ms_ = elapsed_ms;
         if (progress_) progress_line_.show(done, count, elapsed_ms);
     }
 
@@ -253,6 +260,10 @@ class RenderLog final : public RenderRunObserver {
     std::string out_dir_;
     bool progress_;
     ProgressLine progress_line_;
+    // Off a terminal, the lines while a frame traces are info lines.
+    bool trace_log_ = progress_ || spdlog::should_log(spdlog::level::info);
+    TraceProgress trace_progress_{progress_ ? &progress_line_ : nullptr};
+    double frames_ms_ = 0;      // the run's frames so far, for the time left
     std::string effects_said_;  // the effects the log last named
 };
 

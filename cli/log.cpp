@@ -189,10 +189,14 @@ void ProgressLine::show(std::size_t done, std::size_t total, double elapsed_ms) 
     char text[128];
     std::snprintf(text, sizeof text, "kdray: frame %zu/%zu  %.2f fps  ETA %.0f s", done, total, fps,
                   eta_s);
+    show_text(text);
+}
+
+void ProgressLine::show_text(const std::string& text) {
     std::lock_guard<std::mutex> lock(stderr_mutex);
     if (stderr_lost) return;
     progress_text = text;
-    std::fprintf(stderr, "\r\033[K%s", text);
+    std::fprintf(stderr, "\r\033[K%s", text.c_str());
     flush_or_stop();
 }
 

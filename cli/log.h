@@ -49,6 +49,8 @@ bool stderr_is_terminal();
 class ProgressLine {
   public:
     void show(std::size_t done, std::size_t total, double elapsed_ms);
+    /// Shows `text` (one printable line) as the progress line.
+    void show_text(const std::string& text);
     /// Ends the line (a newline) so that what follows starts on a line of its own.
     void finish();
     ~ProgressLine() { finish(); }

@@ -276,7 +276,10 @@ int main(int argc, char** argv) {
         ->check(CLI::NonNegativeNumber);
     render_app->option_defaults()->group("Output");
     render_app->add_flag("-q,--quiet", render.quiet,
-                         "no progress line, and only warnings and errors (unless --log-level)");
+                         "no progress line (on a terminal it is drawn while each frame traces; "
+                         "elsewhere an info line says how far a long frame is every 10 s, or "
+                         "KDRAY_PROGRESS_INTERVAL_S), and only warnings and errors (unless "
+                         "--log-level)");
     render_app->add_flag("--keep-going", render.keep_going,
                          "after a bad frame, render the rest; exit 1 with the failed frames "
                          "listed (default: stop at the first bad frame)");

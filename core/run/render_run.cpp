@@ -100,6 +100,8 @@ void RenderRunObserver::framing_failed(const Error&, std::size_t) {}
 void RenderRunObserver::first_scene(const nlohmann::json&) {}
 void RenderRunObserver::frame_rendered(std::size_t, std::size_t, const nlohmann::json&) {}
 void RenderRunObserver::frame_failed(std::size_t, const Error&) {}
+void RenderRunObserver::tracing(std::size_t, std::size_t, std::size_t, std::uint64_t,
+                                std::uint64_t) {}
 void RenderRunObserver::progress(std::size_t, std::size_t, double) {}
 void RenderRunObserver::frames_finished() {}
 void RenderRunObserver::merged_without_lock(const std::string&) {}
@@ -194,6 +196,9 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
         job.input = inputs[i];
         job.loader = loader_.get();
         job.loaded = announce;
+        job.traced = [this, i, done](std::uint64_t rays, std::uint64_t total) {
+            observer_.tracing(i, done, selected_.size(), rays, total);
+        };
         try {
             frames.push_back(pipeline.render_frame(job, FramePipeline::Output::Write));
             observer_.frame_rendered(done, selected_.size(), frames.back());

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -67,6 +68,11 @@ class RenderRunObserver {
                                 const nlohmann::json& record);
     /// Frame `frame` failed with `error`; the run goes on only with keep_going.
     virtual void frame_failed(std::size_t frame, const Error& error);
+    /// While frame `frame`, the run's `position`-th (from 0) of `count`, traces: `done` of
+    /// `total` primary rays traced, first 0 as the trace starts, then between chunks of the
+    /// tracer's work (RenderInputs::progress); on the run's thread.
+    virtual void tracing(std::size_t frame, std::size_t position, std::size_t count,
+                         std::uint64_t done, std::uint64_t total);
     /// After each frame, rendered or failed: `done` of `count`, `elapsed_ms` since the first
     /// began.
     virtual void progress(std::size_t done, std::size_t count, double elapsed_ms);
