@@ -2,8 +2,11 @@
 // (core/run/render_run.h: per frame, load, build, trace and write the image and the hit AOV, then
 // the run merged into OUTDIR/stats.json), with the builder and the tracer it names (cl/backends.h);
 // the run's messages and progress line on stderr, Ctrl-C, and the exit status.
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -21,11 +24,15 @@
 #include "cli/inputs.h"
 #include "cli/log.h"
 #include "cli/output_target.h"
+#include "cli/resume_command.h"
+#include "cli/trace_progress.h"
 #include "core/error.h"
 #include "core/render/render_file.h"
 #include "core/render/render_setup.h"
 #include "core/run/frame_pipeline.h"
 #include "core/run/render_run.h"
+#include "core/tree/build_quality.h"
+#include "core/tree/reference_builder.h"
 
 namespace kdray::cli {
 namespace {
@@ -83,10 +90,32 @@ void check_output_names(const std::vector<std::string>& inputs,
 /// whole. A second signal ends the process at once; files are renamed into place only when
 /// complete, so even then no truncated image exists under its final name.
 volatile std::sig_atomic_t interrupted = 0;
+/// Whether stderr is a terminal, read by the handler: a progress line there is cleared first.
+volatile std::sig_atomic_t stderr_terminal = 0;
+
+/// `text` on stderr from a signal handler: write(2) is async-signal-safe, stdio and spdlog are not.
+void say_from_handler(const char* text, std::size_t length) {
+    if (stderr_terminal) (void)!::write(STDERR_FILENO, "\r\033[K", 4);
+    (void)!::write(STDERR_FILENO, text, length);
+}
 
 extern "C" void on_interrupt(int signal) {
-    interrupted = 1;
+    const int saved_errno = errno;
+    if (interrupted == 0) {
+        // Said at once: a frame can trace for minutes, and a silent Ctrl-C reads as ignored.
+        interrupted = 1;
+        constexpr char kStopping[] =
+            "kdray: stopping after this frame; Ctrl-C again to abort now\n";
+        say_from_handler(kStopping, sizeof kStopping - 1);
+        errno = saved_errno;
+        return;
+    }
+    constexpr char kAborted[] = "kdray: aborted\n";
+    say_from_handler(kAborted, sizeof kAborted - 1);
+    // Ended by the signal itself, so that the shell sees what ended it (status 128 + signal).
     std::signal(signal, SIG_DFL);
+    std::raise(signal);
+    errno = saved_errno;
 }
 
 /// The command line's overrides of the render file (--spp, --size, --ray-depth, --exposure)
@@ -207,7 +236,13 @@ class RenderLog final : public RenderRunObserver {
 
     void frame_failed(std::size_t, const Error& e) override { spdlog::error("{}", e.what()); }
 
+    void tracing(std::size_t frame, std::size_t position, std::size_t count, std::uint64_t done,
+                 std::uint64_t total) override {
+        if (trace_log_) trace_progress_.tracing(position, count, frame, done, total, frames_ms_);
+    }
+
     void progress(std::size_t done, std::size_t count, double elapsed_ms) override {
+        frames_ms_ = elapsed_ms;
         if (progress_) progress_line_.show(done, count, elapsed_ms);
     }
 
@@ -226,6 +261,10 @@ class RenderLog final : public RenderRunObserver {
     std::string out_dir_;
     bool progress_;
     ProgressLine progress_line_;
+    // Off a terminal, the lines while a frame traces are info lines.
+    bool trace_log_ = progress_ || spdlog::should_log(spdlog::level::info);
+    TraceProgress trace_progress_{progress_ ? &progress_line_ : nullptr};
+    double frames_ms_ = 0;      // the run's frames so far, for the time left
     std::string effects_said_;  // the effects the log last named
 };
 
@@ -266,6 +305,13 @@ int run_render(const RenderCommand& command) {
     run_settings.frame = frame_options(command, target, output_name);
     run_settings.folder_stats = !target.file || command.stats_json;
     run_settings.skip_existing = command.skip_existing;
+    run_settings.other_settings = command.overwrite ? OtherSettings::Overwrite
+                                  : command.mixed   ? OtherSettings::Mixed
+                                                    : OtherSettings::Refuse;
+    const BuildParams build_params = command.builder.build_params(default_quality);
+    run_settings.quality = command.builder.builder == "reference"
+                               ? ReferenceTreeBuilder(build_params).quality()
+                               : build_quality_of(build_params);
     run_settings.keep_going = command.keep_going;
     run_settings.warm_up = command.warm_up;
     run_settings.strict = command.strict;
@@ -276,22 +322,26 @@ int run_render(const RenderCommand& command) {
 
     DeviceSession session(command.builder.device);
     say_when_no_gpu(session, command.builder.device);
-    const std::unique_ptr<TreeBuilder> builder = make_tree_builder(
-        command.builder.builder, command.builder.build_params(default_quality), session);
+    const std::unique_ptr<TreeBuilder> builder =
+        make_tree_builder(command.builder.builder, build_params, session);
     const std::unique_ptr<Tracer> tracer = make_tracer(command.tracer, command.threads, session);
     log.frames = run.frames().size();
     log.builder = builder.get();
     log.builder_quality = builder->quality();
     log.tracer = tracer.get();
     // A closed terminal or a killed ssh session (SIGHUP) stops the run as Ctrl-C does.
+    stderr_terminal = stderr_is_terminal() ? 1 : 0;
     for (const int signal : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal, on_interrupt);
 
     const RenderRunOutcome outcome = run.run(*builder, *tracer);
     // At info: --quiet keeps only the warnings themselves; stats.json's run record counts them.
     if (!outcome.warnings.empty()) spdlog::info("{}", outcome.warnings);
     if (outcome.interrupted) {
-        print_message("kdray: interrupted: ", std::to_string(outcome.rendered) +
-                                                  " frame(s) complete in " + command.output_dir);
+        // The resume command is printed as it is: printable() would cut a long one.
+        print_line_as_is("kdray: interrupted: ",
+                         printable(std::to_string(outcome.rendered) + " frame(s) complete in " +
+                                   command.output_dir) +
+                             "; resume with: " + resume_command(command.command_line));
         return 130;
     }
     if (outcome.failed > 0) {

@@ -39,6 +39,7 @@ struct BuildCommand {
 };
 
 struct RenderCommand {
+    std::vector<std::string> command_line;  // argv as typed: an interrupted run's resume command
     std::vector<std::string> inputs;
     std::string output_dir;
     std::string render_file;
@@ -53,6 +54,9 @@ struct RenderCommand {
     std::string name = "{stem}";  // a frame's file names (core/io/output_name.h)
     bool stats_json = false;      // -o FILE: merge into stats.json beside it all the same
     bool skip_existing = false;   // render only the frames whose files are missing
+    // The folder's records made with other image settings: replaced, or kept beside (default:
+    // the run refuses).
+    bool overwrite = false, mixed = false;
     std::string tracer = "opencl";
     int threads = 0;
     bool quiet = false;

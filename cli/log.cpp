@@ -140,7 +140,10 @@ std::string printable(std::string_view text) {
 }
 
 void print_message(const char* prefix, std::string_view text) {
-    const std::string line = printable(text);
+    print_line_as_is(prefix, printable(text));
+}
+
+void print_line_as_is(const char* prefix, std::string_view line) {
     std::lock_guard<std::mutex> lock(stderr_mutex);
     if (stderr_lost) return;
     // "\r\033[K": back to the start of the progress line and clear it.
@@ -186,10 +189,14 @@ void ProgressLine::show(std::size_t done, std::size_t total, double elapsed_ms) 
     char text[128];
     std::snprintf(text, sizeof text, "kdray: frame %zu/%zu  %.2f fps  ETA %.0f s", done, total, fps,
                   eta_s);
+    show_text(text);
+}
+
+void ProgressLine::show_text(const std::string& text) {
     std::lock_guard<std::mutex> lock(stderr_mutex);
     if (stderr_lost) return;
     progress_text = text;
-    std::fprintf(stderr, "\r\033[K%s", text);
+    std::fprintf(stderr, "\r\033[K%s", text.c_str());
     flush_or_stop();
 }
 

@@ -20,6 +20,10 @@ std::string printable(std::string_view text);
 /// Prints `prefix` ("kdray: error: ") and printable(text) as one line on stderr, around the
 /// progress line. Every message kdray prints goes through here, spdlog's included.
 void print_message(const char* prefix, std::string_view text);
+/// Prints `prefix` and `text` as one line, as they are, around the progress line: for text that
+/// is one printable line already and that printable() would cut (a shell-quoted command to paste
+/// back, cli/resume_command.h).
+void print_line_as_is(const char* prefix, std::string_view text);
 inline void print_error(std::string_view text) {
     print_message("kdray: error: ", text);
 }
@@ -45,6 +49,8 @@ bool stderr_is_terminal();
 class ProgressLine {
   public:
     void show(std::size_t done, std::size_t total, double elapsed_ms);
+    /// Shows `text` (one printable line) as the progress line.
+    void show_text(const std::string& text);
     /// Ends the line (a newline) so that what follows starts on a line of its own.
     void finish();
     ~ProgressLine() { finish(); }

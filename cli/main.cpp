@@ -203,6 +203,7 @@ int main(int argc, char** argv) {
     add_builder_options(*build_app, build.builder);
 
     RenderCommand render;
+    render.command_line.assign(argv, argv + argc);
     auto* render_app =
         app.add_subcommand("render", "Build and trace every frame; write images and stats.json");
     render_app->add_option("frames", render.inputs, "OBJ frames (files or globs), natural order")
@@ -240,7 +241,20 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     render_app->add_flag("--skip-existing", render.skip_existing,
                          "render only the frames whose image (and AOV) are not in the folder yet; "
-                         "stats.json keeps the earlier runs' records of the others");
+                         "stats.json keeps the earlier runs' records of the others. Ctrl-C stops "
+                         "after the frame in progress and prints the command that resumes the "
+                         "run (with this option); a second Ctrl-C aborts at once");
+    auto* overwrite = render_app->add_flag(
+        "--overwrite", render.overwrite,
+        "when the folder's stats.json records frames rendered with other image settings (size, "
+        "spp, ray depth, integrator, exposure, display, build quality, triangle test), which "
+        "refuses the run: replace those records (with --skip-existing, their frames are "
+        "rendered again)");
+    render_app
+        ->add_flag("--mixed", render.mixed,
+                   "... or render beside them into a folder of mixed settings (stats.json's "
+                   "image lists each group's frames)")
+        ->excludes(overwrite);
     render_app->add_flag("--aov", render.aov,
                          "also write <stem>.aov.exr (Z, prim_id, N, cost.nodes, cost.triangles)");
     render_app->add_flag("--heatmap", render.heatmap,
@@ -264,7 +278,10 @@ int main(int argc, char** argv) {
         ->check(CLI::NonNegativeNumber);
     render_app->option_defaults()->group("Output");
     render_app->add_flag("-q,--quiet", render.quiet,
-                         "no progress line, and only warnings and errors (unless --log-level)");
+                         "no progress line (on a terminal it is drawn while each frame traces; "
+                         "elsewhere an info line says how far a long frame is every 10 s, or "
+                         "KDRAY_PROGRESS_INTERVAL_S), and only warnings and errors (unless "
+                         "--log-level)");
     render_app->add_flag("--keep-going", render.keep_going,
                          "after a bad frame, render the rest; exit 1 with the failed frames "
                          "listed (default: stop at the first bad frame)");

@@ -66,7 +66,7 @@ def primary_only(render_json, out_path, frame=None):
 def kdray_frames(kdray, objs, render_json, out_dir):
     """Renders the frames in one process; returns the per-frame records of stats.json."""
     subprocess.run([kdray, "render", *objs, "--camera", render_json, "-o", out_dir, "-q",
-                    "--warm-up"],
+                    "--warm-up", "--overwrite"],
                    check=True, capture_output=True, text=True)
     with open(os.path.join(out_dir, "stats.json")) as f:
         return json.load(f)["frames"]

@@ -111,7 +111,9 @@ def main():
                 out = os.path.join(tmp, folder)
                 start = time.time()
                 run = subprocess.run([args.kdray, "render", obj, "--camera", camera, "--aov", "-q",
-                                      "--builder", args.builder, "--tracer", args.tracer, "-o", out]
+                                      "--builder", args.builder, "--tracer", args.tracer, "-o", out,
+                                      # each quality replaces the one before in the folder
+                                      "--overwrite"]
                                      + (["--quality", quality] if quality else [])
                                      + (["--small-stage", args.small_stage]
                                         if args.small_stage else [])

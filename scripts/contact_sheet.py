@@ -41,7 +41,8 @@ def merged(base, extra):
 
 
 def render_once(kdray, obj, render, out):
-    result = subprocess.run([kdray, "render", obj, "--camera", render, "-o", out, "-q"],
+    result = subprocess.run([kdray, "render", obj, "--camera", render, "-o", out, "-q",
+                             "--overwrite"],
                             capture_output=True, text=True)
     if result.returncode != 0:
         sys.exit(f"contact_sheet: {obj}: {result.stderr.strip()}")
@@ -131,7 +132,8 @@ def main():
                 json.dump(render, f)
             out = os.path.join(tmp, folder)
             result = subprocess.run([args.kdray, "render", os.path.join(path, obj), "--camera",
-                                     render_path, "-o", out, "-q"], capture_output=True, text=True)
+                                     render_path, "-o", out, "-q", "--overwrite"],
+                                    capture_output=True, text=True)
             if result.returncode != 0:
                 sys.exit(f"contact_sheet: {folder}: {result.stderr.strip()}")
             with open(os.path.join(out, "stats.json")) as f:

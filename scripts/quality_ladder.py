@@ -54,7 +54,7 @@ def static_scenes():
 
 def kdray_sequence(kdray, objs, render, out_dir, quality):
     subprocess.run([kdray, "render", *objs, "--camera", render, "-o", out_dir, "-q", "--warm-up",
-                    "--quality", quality], check=True, capture_output=True, text=True)
+                    "--quality", quality, "--overwrite"], check=True, capture_output=True, text=True)
     with open(os.path.join(out_dir, "stats.json")) as f:
         frames = json.load(f)["frames"]
     if any(f["tree"].get("quality") != quality for f in frames):

@@ -179,7 +179,8 @@ def run_kdray(kdray, scene, work, name, text):
     out = work / "out"
     result = subprocess.run(
         [kdray, "render", str(scene), "-o", str(out), "--camera", str(path), "--size", "8x8",
-         "--builder", "reference", "--tracer", "reference", "--quiet"],
+         "--builder", "reference", "--tracer", "reference", "--quiet",
+         "--overwrite"],  # one folder: each file's settings replace the last's
         capture_output=True, text=True, timeout=120)
     return result.returncode, result.stderr, path
 

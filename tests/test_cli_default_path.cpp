@@ -194,8 +194,9 @@ TEST_CASE("stats.json records whether packets traced, not only what --packets as
           Run{{"--packets", "on", "--intersect", "moller"}, false, false},
           Run{{"--packets", "on", "--tracer", "reference"}, false, false}}) {
         std::vector<std::string> args = {
-            "render", obj.string(),           "--camera", render.string(),
-            "-o",     (dir / "out").string(), "-q"};
+            "render", obj.string(), "--camera", render.string(), "-o", (dir / "out").string(), "-q",
+            // One folder for all: each run replaces the one before, whose settings differ.
+            "--overwrite"};
         args.insert(args.end(), run.options.begin(), run.options.end());
         std::string options;
         for (const std::string& o : run.options) options += o + " ";

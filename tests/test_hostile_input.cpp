@@ -468,7 +468,7 @@ TEST_CASE("a full disk: the run fails naming the file, and no image is left unde
     const std::string earlier = read_file(again / "room.png");
     REQUIRE(!earlier.empty());
     write_text_file(mount / "filler", std::string(200 * 1024, 'x'));  // what fits: the disk full
-    const CommandResult full = render(tri, again, camera, {"--aov"});
+    const CommandResult full = render(tri, again, camera, {"--aov", "--overwrite"});
     CHECK(full.status == 1);
     CHECK(read_file(again / "room.png") == earlier);
     CHECK_FALSE(fs::exists(again / "room.aov.exr"));

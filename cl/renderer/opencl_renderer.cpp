@@ -328,10 +328,27 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
                            (shadow_packets ? KDRAY_RENDER_TRACED_SHADOWS : 0u) |
                            (inputs.normals ? KDRAY_RENDER_NORMALS : 0u);
     const KdRenderLaunch launch = frame_launch(view, tree.bounds, outputs);
+    const std::uint64_t rays_per_row = std::uint64_t(view.width) * kd_primary_rays_per_pixel(&view);
+    const std::uint64_t total_rays = rays_per_row * view.height;
+    if (inputs.progress) inputs.progress(0, total_rays);
     with_cl_context("rendering a frame on " + device.info().name, [&] {
-        for (std::size_t row = 0; row < view.height; row += step)
-            launch_rows(device, plan, b, launch,
-                        {row, std::min<std::size_t>(step, view.height - row)});
+        // With a progress callback, a marker after each launch; the host waits for the launch
+        // before the one just queued, so that the device always has the next one to run.
+        cl::Event previous;
+        std::size_t previous_rows = 0;
+        for (std::size_t row = 0; row < view.height; row += step) {
+            const std::size_t rows = std::min<std::size_t>(step, view.height - row);
+            launch_rows(device, plan, b, launch, {row, rows});
+            if (!inputs.progress) continue;
+            cl::Event marker;
+            device.queue().enqueueMarkerWithWaitList(nullptr, &marker);
+            if (previous()) {
+                previous.wait();
+                inputs.progress(previous_rows * rays_per_row, total_rays);
+            }
+            previous = marker;
+            previous_rows = row + rows;
+        }
     });
 
     FrameResult frame;

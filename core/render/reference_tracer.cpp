@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <thread>
 #include <vector>
@@ -141,8 +142,14 @@ FrameResult render_reference(const KdTree& tree, const Scene& scene, const Rende
     std::vector<KdRayCounts> counts(pixels);
 
     // Rows handed out dynamically: a row is a few hundred rays, and neighbouring rows cost alike.
+    // The calling thread, one of the workers, reports the rows done after each of its own.
+    const std::uint64_t rays_per_row = std::uint64_t(view.width) * kd_primary_rays_per_pixel(&view);
+    const std::uint64_t total_rays = rays_per_row * view.height;
+    std::atomic<std::size_t> rows_done{0};
+    const std::thread::id caller = std::this_thread::get_id();
+    if (inputs.progress) inputs.progress(0, total_rays);
     parallel_chunks(std::size_t(view.height), 1, threads, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t y = begin; y < end; ++y)
+        for (std::size_t y = begin; y < end; ++y, ++rows_done)
             for (kd_u32 x = 0; x < view.width; ++x) {
                 const std::size_t i = y * view.width + x;
                 if (in.empty) {
@@ -161,6 +168,8 @@ FrameResult render_reference(const KdTree& tree, const Scene& scene, const Rende
                 if (inputs.cost)
                     kd_pixel_cost(&scene_view, &view, x, kd_u32(y), &frame.hits.costs[i]);
             }
+        if (inputs.progress && std::this_thread::get_id() == caller)
+            inputs.progress(rows_done * rays_per_row, total_rays);
     });
     for (const KdRayCounts& c : counts) frame.rays.add(c);
     return frame;

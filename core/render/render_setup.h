@@ -7,6 +7,8 @@
 // file asks for it. The decision and its reasons go to stats.json.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -66,6 +68,10 @@ struct RenderInputs {
     /// Whether it carries each centre ray's walk (kd_pixel_cost: the AOV's cost channels and the
     /// heat map), traced in a pass of its own.
     bool cost = false;
+    /// Told, on the calling thread, how far the trace is: `done` of `total` primary rays (camera
+    /// samples) traced, once with 0 as it starts and then between chunks of work (the OpenCL
+    /// tracer's launches, the reference's rows). Empty: nobody asks.
+    std::function<void(std::uint64_t done, std::uint64_t total)> progress;
 };
 RenderInputs prepare_render(const Scene& scene, const RenderSettings& settings,
                             const Camera& camera, kd_u32 seed);

@@ -68,6 +68,7 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
     inputs.cost = options_.aov || options_.heatmap;
     inputs.intersect = options_.intersect;
     inputs.packets = options_.packets;
+    inputs.progress = job.traced;
     tracer_.prepare(inputs);
     const double compile_ms =
         options_.compile_ms_so_far ? options_.compile_ms_so_far() - compiled_before : 0;

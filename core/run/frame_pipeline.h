@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -65,6 +66,8 @@ struct FrameJob {
     /// Called once the scene is in, before the frame is framed and built (the run's first scene
     /// announced: the device is open, the effects known).
     std::function<void(const Scene&)> loaded = nullptr;
+    /// Told how far the frame's trace is (RenderInputs::progress); may be empty.
+    std::function<void(std::uint64_t done, std::uint64_t total)> traced = nullptr;
 };
 
 class FramePipeline {

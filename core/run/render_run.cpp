@@ -49,8 +49,10 @@ void check_host_memory(const RenderRunSettings& settings) {
 std::vector<std::size_t> frames_done(const std::vector<std::string>& inputs,
                                      const std::vector<std::size_t>& selected,
                                      const nlohmann::json& previous, bool records,
-                                     const FrameOptions& frame) {
-    const std::set<std::string> completed = completed_images(previous);
+                                     const FrameOptions& frame,
+                                     const std::set<std::string>& stale) {
+    std::set<std::string> completed = completed_images(previous);
+    for (const std::string& image : stale) completed.erase(image);
     std::vector<std::size_t> done;
     const std::filesystem::path& dir = frame.out_dir;
     for (const std::size_t i : selected) {
@@ -67,6 +69,34 @@ std::vector<std::size_t> frames_done(const std::vector<std::string>& inputs,
     return done;
 }
 
+/// The run's settings that decide its images, as its stats.json record states them: the keys
+/// image_settings reads.
+nlohmann::json image_keys(const RenderRunSettings& settings) {
+    const RenderSettings& render = settings.render;
+    nlohmann::json keys = {
+        {"image", {{"width", render.width}, {"height", render.height}, {"spp", render.spp}}},
+        {"integrator", integrator_name(render.integrator)},
+        // The render file's max_depth, after --ray-depth: one name per depth in stats.json.
+        {"ray_depth", render.max_depth},
+        {"exposure", render.exposure},
+        // The 8-bit images' transform (EXR images are linear whatever it is).
+        {"display", display_name(render.display)},
+        {"intersect", intersect_name(settings.frame.intersect)}};
+    if (!settings.quality.empty()) keys["quality"] = settings.quality;
+    return keys;
+}
+
+/// The images (file names) of `previous`'s records made with image settings other than `own`.
+std::set<std::string> images_of_other_settings(const nlohmann::json& previous,
+                                               const nlohmann::json& own) {
+    std::set<std::string> images;
+    const std::vector<nlohmann::json> settings = record_settings(previous);
+    for (std::size_t k = 0; k < settings.size(); ++k)
+        if (settings_differ(settings[k], own))
+            images.insert(previous["frames"][k].value("image", std::string()));
+    return images;
+}
+
 }  // namespace
 
 void RenderRunObserver::skipping(std::size_t, std::size_t) {}
@@ -75,6 +105,8 @@ void RenderRunObserver::first_scene(const nlohmann::json&) {}
 void RenderRunObserver::frame_rendered(std::size_t, std::size_t, const nlohmann::json&) {}
 void RenderRunObserver::warned(const std::string&) {}
 void RenderRunObserver::frame_failed(std::size_t, const Error&) {}
+void RenderRunObserver::tracing(std::size_t, std::size_t, std::size_t, std::uint64_t,
+                                std::uint64_t) {}
 void RenderRunObserver::progress(std::size_t, std::size_t, double) {}
 void RenderRunObserver::frames_finished() {}
 void RenderRunObserver::merged_without_lock(const std::string&) {}
@@ -90,9 +122,17 @@ RenderRun::RenderRun(RenderRunSettings settings, RenderRunObserver& observer)
     // the run before it renders.
     const bool records = settings_.folder_stats;
     const nlohmann::json previous = records ? read_folder_stats(out_dir) : nlohmann::json();
+    // A folder holds the images of one set of settings unless told otherwise: a resume at
+    // another size, or one frame re-rendered into an animation's folder, mixed them silently.
+    const nlohmann::json own = image_settings(image_keys(settings_));
+    if (settings_.other_settings == OtherSettings::Refuse)
+        check_folder_settings(out_dir.string(), previous, own);
     if (settings_.skip_existing) {
+        const std::set<std::string> stale = settings_.other_settings == OtherSettings::Overwrite
+                                                ? images_of_other_settings(previous, own)
+                                                : std::set<std::string>();
         const std::vector<std::size_t> done =
-            frames_done(settings_.inputs, selected_, previous, records, settings_.frame);
+            frames_done(settings_.inputs, selected_, previous, records, settings_.frame, stale);
         if (!done.empty()) {
             observer_.skipping(done.size(), selected_.size());
             std::vector<std::size_t> rest;
@@ -175,6 +215,9 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
             announce(scene);
             warn(i, scene.warnings);
         };
+        job.traced = [this, i, done](std::uint64_t rays, std::uint64_t total) {
+            observer_.tracing(i, done, selected_.size(), rays, total);
+        };
         try {
             nlohmann::json frame = pipeline.render_frame(job, FramePipeline::Output::Write);
             std::vector<std::string> tree_warnings;
@@ -205,34 +248,29 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
     outcome.failed = failures.size();
     outcome.interrupted = observer_.interrupted();
     outcome.warnings = warnings.summary();
-    const RenderSettings& render = settings_.render;
-    nlohmann::json run = {
-        {"kdray_version", kVersion},
-        {"name", settings_.frame.name.pattern()},
-        {"builder", builder.description()},
-        {"tracer", tracer.name()},
-        {"exact_arithmetic", tracer.exact_arithmetic()},
-        {"render_file", settings_.render_file},
-        {"image", {{"width", render.width}, {"height", render.height}, {"spp", render.spp}}},
-        {"integrator", integrator_name(render.integrator)},
-        // The render file's max_depth, after --ray-depth: one name per depth in stats.json.
-        {"ray_depth", render.max_depth},
-        // The 8-bit images' transform (EXR images are linear whatever it is).
-        {"display", display_name(render.display)},
-        {"overrides", settings_.overrides},
-        {"intersect", intersect_name(settings_.frame.intersect)},
-        // Each frame's "packets": what ran.
-        {"packets_requested", packets_name(settings_.frame.packets)},
-        // Before the first frame: the inputs checked, the device opened, the first load started.
-        {"setup_ms", setup_ms},
-        {"frames", frames}};
+    nlohmann::json run = image_keys(settings_);
+    if (!run.contains("quality")) run["quality"] = builder.quality();
+    run.update(
+        {{"kdray_version", kVersion},
+         {"name", settings_.frame.name.pattern()},
+         {"builder", builder.description()},
+         {"tracer", tracer.name()},
+         {"exact_arithmetic", tracer.exact_arithmetic()},
+         {"render_file", settings_.render_file},
+         {"overrides", settings_.overrides},
+         // Each frame's "packets": what ran.
+         {"packets_requested", packets_name(settings_.frame.packets)},
+         // Before the first frame: the inputs checked, the device opened, the first load started.
+         {"setup_ms", setup_ms},
+         {"frames", frames}});
     if (settings_.warm_up) run["warm_up_ms"] = warm_up_ms;
     if (warnings.total() > 0) run["warnings"] = warnings.to_json();
     if (!failures.empty()) run["failed_frames"] = failures;
     if (outcome.interrupted) run["interrupted_after_frames"] = frames.size();
     if (settings_.folder_stats && (!frames.empty() || !failures.empty())) {
         // Other runs into the folder (shards, earlier runs) keep their records.
-        const FolderMerge merge = merge_into_folder(out_dir, std::move(run));
+        const FolderMerge merge = merge_into_folder(
+            out_dir, std::move(run), settings_.other_settings == OtherSettings::Overwrite);
         if (!merge.locked) observer_.merged_without_lock(merge.lock_problem);
     }
     return outcome;

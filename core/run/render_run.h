@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -23,6 +24,7 @@
 #include "core/render/tracer.h"
 #include "core/run/frame_loader.h"
 #include "core/run/frame_pipeline.h"
+#include "core/run/image_settings.h"
 #include "core/tree/tree_builder.h"
 
 namespace kdray {
@@ -44,6 +46,11 @@ struct RenderRunSettings {
     bool keep_going = false;     // render the remaining frames after a bad one
     bool warm_up = false;        // render the first frame once, untimed and unwritten, first
     bool strict = false;         // any warning fails the frame, before it builds where it can
+    /// Records in the folder made with other image settings (core/run/image_settings.h).
+    OtherSettings other_settings = OtherSettings::Refuse;
+    /// The builder's quality (TreeBuilder::quality), known before the device opens so that the
+    /// folder's records are checked against it; empty: not checked, taken from the builder.
+    std::string quality;
     /// When the run began checking its inputs: stats.json's setup_ms counts from there.
     FrameClock::time_point setup_start = FrameClock::now();
 };
@@ -67,6 +74,11 @@ class RenderRunObserver {
     virtual void warned(const std::string& text);
     /// Frame `frame` failed with `error`; the run goes on only with keep_going.
     virtual void frame_failed(std::size_t frame, const Error& error);
+    /// While frame `frame`, the run's `position`-th (from 0) of `count`, traces: `done` of
+    /// `total` primary rays traced, first 0 as the trace starts, then between chunks of the
+    /// tracer's work (RenderInputs::progress); on the run's thread.
+    virtual void tracing(std::size_t frame, std::size_t position, std::size_t count,
+                         std::uint64_t done, std::uint64_t total);
     /// After each frame, rendered or failed: `done` of `count`, `elapsed_ms` since the first
     /// began.
     virtual void progress(std::size_t done, std::size_t count, double elapsed_ms);
@@ -92,8 +104,10 @@ class RenderRun {
   public:
     /// Checks what can be checked before the device opens, in this order: a frame of the image
     /// size fits in half the host's memory; the output folder's stats.json, when there is one,
-    /// can be merged into; with skip_existing, the frames the folder holds are dropped (the
-    /// observer told how many). Throws Error naming the file or the figures.
+    /// can be merged into and (other_settings Refuse) holds no record made with other image
+    /// settings (UsageError naming them); with skip_existing, the frames the folder holds are
+    /// dropped (with Overwrite, only those recorded with the run's settings; the observer told
+    /// how many). Throws Error naming the file or the figures.
     RenderRun(RenderRunSettings settings, RenderRunObserver& observer);
     ~RenderRun();
 

@@ -16,6 +16,7 @@
 #include "core/error.h"
 #include "core/io/atomic_file.h"
 #include "core/io/input_file.h"
+#include "core/run/image_settings.h"
 #include "core/run/stats_json.h"
 
 namespace kdray {
@@ -198,9 +199,11 @@ class FolderLock {
 
 }  // namespace
 
-FolderMerge merge_into_folder(const std::filesystem::path& dir, nlohmann::json run) {
+FolderMerge merge_into_folder(const std::filesystem::path& dir, nlohmann::json run,
+                              bool replace_other_settings) {
     const FolderLock lock(dir);
-    const nlohmann::json merged = merge_render_stats(read_folder_stats(dir), std::move(run));
+    const nlohmann::json merged =
+        merge_render_stats(read_folder_stats(dir), std::move(run), replace_other_settings);
     write_file_atomically(dir / "stats.json", json_text(merged) + "\n");
     return {lock.problem().empty(), lock.problem()};
 }
@@ -227,7 +230,8 @@ std::vector<nlohmann::json> frames_by_run(const nlohmann::json& frames) {
     return groups;
 }
 
-nlohmann::json merge_render_stats(nlohmann::json previous, nlohmann::json run) {
+nlohmann::json merge_render_stats(nlohmann::json previous, nlohmann::json run,
+                                  bool replace_other_settings) {
     // The earlier runs: a file written before runs were recorded is one run. Their records are
     // moved, not copied, out of `previous`: copies made a large stats.json's merge cost several
     // times its parse.
@@ -250,6 +254,17 @@ nlohmann::json merge_render_stats(nlohmann::json previous, nlohmann::json run) {
                 frames.push_back(std::move(frame));
             }
         if (previous.contains("failed_frames")) failures = std::move(previous["failed_frames"]);
+    }
+
+    if (replace_other_settings) {
+        const nlohmann::json own = image_settings(run);
+        frames.erase(std::remove_if(frames.begin(), frames.end(),
+                                    [&](const nlohmann::json& f) {
+                                        const std::size_t r = f.value("run", std::size_t(0));
+                                        return r < runs.size() &&
+                                               settings_differ(image_settings(runs[r], f), own);
+                                    }),
+                     frames.end());
     }
 
     // This run's records replace the earlier records of their frames, and its failures the
@@ -292,6 +307,11 @@ nlohmann::json merge_render_stats(nlohmann::json previous, nlohmann::json run) {
     merged["runs"] = std::move(runs);
     merged["frames"] = nlohmann::json::array();
     for (nlohmann::json& frame : frames) merged["frames"].push_back(std::move(frame));
+    // Never one size claimed for a folder that holds several (--mixed, or files from before the
+    // guard).
+    if (nlohmann::json image = folder_image(merged, merged.value("image", nlohmann::json()));
+        !image.is_null())
+        merged["image"] = std::move(image);
     merged["summary"] = summarise_runs(frames_by_run(merged["frames"]));
     // One folder holds one record per image: scenes rendered one by one into it share frame 0.
     merged["summary"].erase("warning");

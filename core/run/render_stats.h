@@ -52,7 +52,8 @@ struct FolderMerge {
 
 /// Merges `run` into `dir`/stats.json (merge_render_stats) under an exclusive lock on
 /// `dir`/.kdray-stats.lock, so that shards finishing at once add up; written atomically.
-FolderMerge merge_into_folder(const std::filesystem::path& dir, nlohmann::json run);
+FolderMerge merge_into_folder(const std::filesystem::path& dir, nlohmann::json run,
+                              bool replace_other_settings = false);
 
 /// `frames` (a stats.json's frame records) grouped by the run that rendered them ("run"; none:
 /// run 0), each group in frame order: summarise_runs's input for one folder (each record cut to
@@ -65,7 +66,10 @@ std::vector<nlohmann::json> frames_by_run(const nlohmann::json& frames);
 /// place of the earlier failures of theirs (a failure leaves an earlier record of its image,
 /// which it did not replace), and the
 /// summary recomputed over every frame, each run's first frame counted as a first
-/// (summarise_runs). `run`'s other keys are its settings.
-nlohmann::json merge_render_stats(nlohmann::json previous, nlohmann::json run);
+/// (summarise_runs). `run`'s other keys are its settings. With `replace_other_settings`
+/// (--overwrite), the earlier records whose image settings differ from the run's are dropped
+/// (core/run/image_settings.h); the top-level "image" says when the records still differ.
+nlohmann::json merge_render_stats(nlohmann::json previous, nlohmann::json run,
+                                  bool replace_other_settings = false);
 
 }  // namespace kdray
