@@ -1,5 +1,6 @@
 #include "cli/trace_progress.h"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
@@ -31,7 +32,7 @@ std::string tracing_text(std::size_t position, std::size_t count, double fractio
     char text[160];
     std::snprintf(text, sizeof text,
                   "kdray: frame %zu/%zu  tracing %.0f%%  %.2f Mrays/s  ETA %.0f s", position + 1,
-                  count, 100.0 * fraction, rays_per_s / 1e6, eta_s);
+                  count, std::floor(100.0 * fraction), rays_per_s / 1e6, eta_s);
     return text;
 }
 
@@ -46,8 +47,9 @@ void TraceProgress::tracing(std::size_t position, std::size_t count, std::size_t
         return;
     }
     const double elapsed_s = seconds_between(start_, now);
+    // Nothing once the trace is done: the frame's own line follows at once.
     if (seconds_between(last_, now) < (line_ ? kRedrawS : interval_s_) || total == 0 ||
-        elapsed_s <= 0)
+        done >= total || elapsed_s <= 0)
         return;
     last_ = now;
     const double fraction = double(done) / double(total);
@@ -65,7 +67,8 @@ void TraceProgress::tracing(std::size_t position, std::size_t count, std::size_t
     spdlog::info(
         "frame {} ({}/{}): traced {:.0f}% of its {} primary rays, {:.2f} Mrays/s; about "
         "{:.1f} s left in the frame, {:.1f} s in the run",
-        frame, position + 1, count, 100.0 * fraction, total, rays_per_s / 1e6, frame_left_s, eta_s);
+        frame, position + 1, count, std::floor(100.0 * fraction), total, rays_per_s / 1e6,
+        frame_left_s, eta_s);
 }
 
 }  // namespace kdray::cli

@@ -69,7 +69,8 @@ TEST_CASE("off a terminal a long frame says how far its trace is, at intervals")
                 CHECK(totals[k] == rays);
                 CHECK(percentages[k] > 0);
                 CHECK(percentages[k] < 100);
-                if (k > 0) CHECK(percentages[k] > percentages[k - 1]);
+                // Whole percents, rounded down: two lines may show the same one.
+                if (k > 0) CHECK(percentages[k] >= percentages[k - 1]);
             }
             // Said before the frame's own line.
             CHECK(r.err.find("traced ") < r.err.find("kdray: frame 0 (1/1, "));
