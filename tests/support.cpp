@@ -321,6 +321,16 @@ std::filesystem::path source_dir() {
     return KDRAY_SOURCE_DIR;
 }
 
+std::vector<std::string> anim_frames(int n) {
+    std::vector<std::string> frames;
+    for (int i = 0; i < n; ++i) {
+        char name[32];
+        std::snprintf(name, sizeof name, "frame_%03d.obj", i);
+        frames.push_back((source_dir() / "testdata" / "anim" / name).string());
+    }
+    return frames;
+}
+
 namespace {
 
 std::string shell_quote(const std::string& s) {

@@ -142,6 +142,9 @@ std::filesystem::path write_obj(const std::filesystem::path& path, const Scene& 
 
 /// The repository root (for testdata/) and ../shared beside it (may not exist).
 std::filesystem::path source_dir();
+
+/// The first `n` frames of testdata/anim, as paths.
+std::vector<std::string> anim_frames(int n);
 std::filesystem::path shared_dir();
 
 /// An environment variable set for the guard's life (this process and the kdray it runs), then

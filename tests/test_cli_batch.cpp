@@ -36,17 +36,6 @@ using namespace kdray::test;
 
 namespace {
 
-/// The first `n` frames of testdata/anim.
-std::vector<std::string> anim_frames(int n) {
-    std::vector<std::string> frames;
-    for (int i = 0; i < n; ++i) {
-        char name[32];
-        std::snprintf(name, sizeof name, "frame_%03d.obj", i);
-        frames.push_back((source_dir() / "testdata" / "anim" / name).string());
-    }
-    return frames;
-}
-
 /// `kdray render FRAMES -o OUT --size 48x36 EXTRA...` on `path` ("opencl" or "reference").
 CommandResult render(const std::vector<std::string>& frames, const fs::path& out,
                      const std::string& path, std::vector<std::string> extra = {}) {
