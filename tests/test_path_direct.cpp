@@ -57,6 +57,10 @@ Scene floor_under_lamp(const std::filesystem::path& dir, const std::string& mtl)
     return load_obj(dir / "scene.obj");
 }
 
+/// A Lambertian floor (Kd 0.6 0.5 0.4) and the lamp (Ke 6 5 4), for floor_under_lamp.
+const char* const kLambertFloorMtl =
+    "newmtl floor\nKd 0.6 0.5 0.4\nillum 1\nnewmtl lamp\nKd 0 0 0\nKe 6 5 4\n";
+
 /// Looking down at the floor past the lamp, so that the lamp's mirror image lights a highlight.
 const Camera kFloorCamera{{0.0f, 1.0f, 2.2f}, {0, 0, -0.3f}, {0, 1, 0}, 60.0f};
 
@@ -181,8 +185,7 @@ TEST_CASE("path: a Lambertian floor under a square lamp has the polygon's closed
     // each floor pixel's radiance is Kd / pi times that, for Whitted's light sampling and for the
     // path integrator's MIS at max_depth 2 alike.
     const auto dir = test::fresh_temp_dir("path_lamp");
-    const Scene scene = floor_under_lamp(
-        dir, "newmtl floor\nKd 0.6 0.5 0.4\nillum 1\nnewmtl lamp\nKd 0 0 0\nKe 6 5 4\n");
+    const Scene scene = floor_under_lamp(dir, kLambertFloorMtl);
     const KdTree tree = build_reference(scene);
     // One sample, the centre ray: the hit, and so the closed form, is the pixel's.
     const auto [whitted, path] = direct_light(128, 96, 1, kFloorCamera);
@@ -235,8 +238,7 @@ TEST_CASE("whitted: a pixel's area-light samples are stratified, nearer the clos
     // move in lockstep (a pair's first coordinate, unpermuted, beside another pair's: 0.9x on the
     // glass room's walls), the errors are alike.
     const auto dir = test::fresh_temp_dir("whitted_strata");
-    const Scene scene = floor_under_lamp(
-        dir, "newmtl floor\nKd 0.6 0.5 0.4\nillum 1\nnewmtl lamp\nKd 0 0 0\nKe 6 5 4\n");
+    const Scene scene = floor_under_lamp(dir, kLambertFloorMtl);
     const KdTree tree = build_reference(scene);
     // A narrow view of the floor point (0.1, 0, -0.1), off the lamp's centre.
     auto [whitted, path] =
