@@ -455,8 +455,10 @@ TEST_CASE("failed writes throw, name the path and leave no file") {
     fs::create_directory(dir.path / "taken.png");
     CHECK_THROWS_WITH_AS(write_image(dir.path / "taken.png", image),
                          doctest::Contains((dir.path / "taken.png").string().c_str()), Error);
-    // Formats kdray does not write, and an AOV that is not OpenEXR.
-    CHECK_THROWS_AS(write_image(dir.path / "frame.jpg", image), Error);
+    // Formats kdray does not write (it writes .png, .jpg, .tif and .exr), and an AOV that is
+    // not OpenEXR.
+    CHECK_THROWS_WITH_AS(write_image(dir.path / "frame.bmp", image),
+                         doctest::Contains("unknown image extension '.bmp'"), Error);
     CHECK_THROWS_AS(write_aov(dir.path / "hits.png", hits), Error);
     // A buffer whose size does not match its dimensions.
     CHECK_THROWS_AS(write_image(dir.path / "bad.png", Image{3, 2, std::vector<float>(12)}), Error);
