@@ -27,7 +27,7 @@ if [[ "${1:-}" == "--sanitize" ]]; then
     # It runs after the Release run, whose kernels fill the shared cache below, and warm it has
     # not crashed (3 whole runs and 8 runs of the longest CLI tests, two at a time); the one
     # failure those runs did show was the buffer ledger's race, since fixed. One at a time the
-    # run took 243 s of CI's 20 minutes; two at a time, 128 s. On a cold cache (the sanitizer
+    # run took 243 s; two at a time, 128 s. On a cold cache (the sanitizer
     # run on its own, first) it still goes one at a time.
     jobs=$(nproc)
     sanitize=1
