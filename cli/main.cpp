@@ -332,7 +332,8 @@ int main(int argc, char** argv) {
         "compare",
         "Compare two hit AOVs (docs/conventions.md: both miss, or both hit with |Z_a - Z_b| <= "
         "1e-4 max(1, Z_b); B is the reference) or two images; exit 1 when they disagree");
-    compare_app->add_option("a", compare.a, "AOV (.aov.exr) or image (PNG, EXR)")->required();
+    compare_app->add_option("a", compare.a, "AOV (.aov.exr) or image (PNG, EXR, JPEG, TIFF)")
+        ->required();
     compare_app->add_option("b", compare.b, "the reference AOV or image")->required();
     compare_app->add_flag("--json", compare.json, "machine-readable output");
     compare_app
