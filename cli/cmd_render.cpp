@@ -236,6 +236,8 @@ class RenderLog final : public RenderRunObserver {
 
     void frame_failed(std::size_t, const Error& e) override { spdlog::error("{}", e.what()); }
 
+    bool wants_tracing() const override { return trace_log_; }
+
     void tracing(std::size_t frame, std::size_t position, std::size_t count, std::uint64_t done,
                  std::uint64_t total) override {
         if (trace_log_) trace_progress_.tracing(position, count, frame, done, total, frames_ms_);

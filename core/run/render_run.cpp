@@ -107,6 +107,9 @@ void RenderRunObserver::warned(const std::string&) {}
 void RenderRunObserver::frame_failed(std::size_t, const Error&) {}
 void RenderRunObserver::tracing(std::size_t, std::size_t, std::size_t, std::uint64_t,
                                 std::uint64_t) {}
+bool RenderRunObserver::wants_tracing() const {
+    return false;
+}
 void RenderRunObserver::progress(std::size_t, std::size_t, double) {}
 void RenderRunObserver::frames_finished() {}
 void RenderRunObserver::merged_without_lock(const std::string&) {}
@@ -215,9 +218,10 @@ RenderRunOutcome RenderRun::run(TreeBuilder& builder, Tracer& tracer) {
             announce(scene);
             warn(i, scene.warnings);
         };
-        job.traced = [this, i, done](std::uint64_t rays, std::uint64_t total) {
-            observer_.tracing(i, done, selected_.size(), rays, total);
-        };
+        if (observer_.wants_tracing())
+            job.traced = [this, i, done](std::uint64_t rays, std::uint64_t total) {
+                observer_.tracing(i, done, selected_.size(), rays, total);
+            };
         try {
             nlohmann::json frame = pipeline.render_frame(job, FramePipeline::Output::Write);
             std::vector<std::string> tree_warnings;

@@ -79,6 +79,9 @@ class RenderRunObserver {
     /// tracer's work (RenderInputs::progress); on the run's thread.
     virtual void tracing(std::size_t frame, std::size_t position, std::size_t count,
                          std::uint64_t done, std::uint64_t total);
+    /// Whether tracing() shows anything: when not, the tracers are given no progress callback
+    /// (the OpenCL tracer then queues a frame's launches without waiting between them).
+    virtual bool wants_tracing() const;
     /// After each frame, rendered or failed: `done` of `count`, `elapsed_ms` since the first
     /// began.
     virtual void progress(std::size_t done, std::size_t count, double elapsed_ms);
