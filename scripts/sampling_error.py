@@ -26,10 +26,13 @@ from accuracy_vs_time import image_error, kdray_render, link_copies, write_rende
 from bench_common import ROOT, SHARED, run_record, write_json, write_markdown  # noqa: E402
 
 SPPS = [1, 4, 16, 64, 256]
-# The change docs/sampling-error.md measured (#30's first step).
-CHANGE = ("Before: independent hashes per sample and dimension; after: each pixel's samples "
-          "low-discrepancy (the R2 sequence, rotated per pixel; docs/path-tracing.md). Whitted's "
-          "area-light samples stay hashes of the shading point: only its pixel jitter changed.")
+# The change docs/sampling-error.md measures: #30's sampler as a whole, from the independent hashes
+# it replaced (commit 7c7ed41) to the sampler kdray has now, against one reference.
+CHANGE = ("Before: commit 7c7ed41, independent hashes per sample and dimension, Whitted's area-light "
+          "samples hashes of the shading point; after: each pixel's samples low-discrepancy (the R2 "
+          "sequence, rotated per pixel), each pair of dimensions taking the pixel's points in an "
+          "order of its own (a hash permutation of the sample indices), and Whitted's area-light "
+          "samples following the pixel's sequence (docs/path-tracing.md, kd_shading.h).")
 
 
 def scenes():
