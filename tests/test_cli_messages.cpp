@@ -3,7 +3,8 @@
 // other light's name the right one, a render file or another scene format given as a frame what
 // kdray reads; --device takes a device type; a CPU run for want of a GPU is said once; --frames
 // takes N and START-END, and says which frames of a range lie past the inputs. Each runs the
-// binary.
+// binary. A scene whose materials have Ka, rendered without ambient light, is told why its
+// shadows are black (#30).
 #include <doctest/doctest.h>
 
 #include <filesystem>
@@ -214,5 +215,24 @@ TEST_CASE("--device gpu and cpu choose by type; a CPU chosen for want of a GPU i
     REQUIRE(chosen.status == 0);
     CHECK((chosen.err.find(said + " '" + first_cpu + "'") != std::string::npos) ==
           first_gpu.empty());
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a scene whose materials reflect ambient light, rendered without any, is told so") {
+    const fs::path dir = fresh_temp_dir("messages-ambient");
+    write_text_file(dir / "m.mtl", "newmtl lit\nKd 0.5 0.5 0.5\nKa 0.3 0.3 0.3\n");
+    const fs::path obj =
+        write_text_file(dir / "tri.obj", std::string("mtllib m.mtl\nusemtl lit\n") + kTriangle);
+    const CommandResult none = render(obj, dir / "none", {});
+    REQUIRE(none.status == 0);
+    CHECK(none.err.find("no ambient term: the render file has no ambient light, though material "
+                        "'lit' reflects it (Ka > 0)") != std::string::npos);
+    // With ambient light there is nothing to say, and the term is simulated.
+    const fs::path render_file =
+        write_text_file(dir / "render.json", "{\"ambient\": [0.2, 0.2, 0.2]}");
+    const CommandResult lit = render(obj, dir / "lit", {"--render-file", render_file.string()});
+    REQUIRE(lit.status == 0);
+    CHECK(lit.err.find("no ambient term") == std::string::npos);
+    CHECK(read_json(dir / "lit" / "stats.json")["frames"][0]["effects"]["ambient"] == true);
     fs::remove_all(dir);
 }

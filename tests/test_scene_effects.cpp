@@ -115,7 +115,8 @@ TEST_CASE("ambient: a hit adds Ka x ambient, exactly where nothing else lights i
             CHECK_FALSE(inputs.effects.ambient);
             CHECK((inputs.effects.bits() & KDRAY_EFFECT_AMBIENT) == 0u);
             CHECK(inputs.effects.to_json()["reasons"]["ambient"] ==
-                  (which == 0 ? "the render file has no ambient light"
+                  (which == 0 ? "the render file has no ambient light, though material '" +
+                                    s.materials[0].name + "' reflects it (Ka > 0)"
                               : "no material reflects ambient light (Ka 0)"));
             const FrameResult frame = render_reference(tree, s, inputs, 1);
             for (float v : frame.image.rgb)

@@ -66,7 +66,11 @@ Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
     if (path) {
         e.ambient_reason = "the path integrator computes indirect light in its place";
     } else if (!(light.x > 0 || light.y > 0 || light.z > 0)) {
-        e.ambient_reason = "the render file has no ambient light";
+        // A material with Ka asks for an ambient term the render file does not give: said, so
+        // that a user sees why the scene's shadows are black (the shared BART scenes).
+        e.ambient_reason = ambient ? "the render file has no ambient light, though material '" +
+                                         ambient->name + "' reflects it (Ka > 0)"
+                                   : "the render file has no ambient light";
     } else if (!ambient) {
         e.ambient_reason = "no material reflects ambient light (Ka 0)";
     } else {
