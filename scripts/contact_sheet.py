@@ -1,13 +1,16 @@
 #!/usr/bin/env python3
-"""A contact sheet of the scene effects on the shared scenes: Sponza textured, the Cornell box lit
-by its ceiling panel (soft shadows), the BART Kitchen and Robots with their ambient term. Each is
-rendered by kdray with the scene's own render.json (plus `ambient` where the scene's materials
-call for it, and more samples where area lights are sampled), then tiled with `oiiotool --mosaic`
-into docs/scene-effects.png, with the effects each frame's stats.json lists in
-docs/scene-effects.json. Beside them, what each effect costs where a scene calls for it: the
-same frame traced with the effect and without it (textures: Sponza, its MTL without map_Kd and
-map_Ka; area lights: CornellBox-Original at 16 spp, its MTL without Ke; ambient: the Kitchen's
-frame 0 with and without `ambient`), each the median trace_ms of --repeat runs taken in turn.
+"""A contact sheet of the scene effects on the shared scenes: Sponza path-traced with its textures,
+the Cornell box lit by its ceiling panel (soft shadows), the BART Kitchen and Robots with their
+ambient term. Each tile is one `kdray render` a user can type: the scene, a render file that is
+either the scene's own (../shared/scenes/*/render.json) or one kdray ships for it
+(scripts/render-files/*.json, for what the shared file lacks: the path integrator, ambient light),
+and command-line options only for the tile's size and samples. The tiles are joined with
+`oiiotool --mosaic` into docs/scene-effects.png; the commands, and the effects each frame's
+stats.json lists, go to docs/scene-effects.json. Beside them, what each effect costs where a scene
+calls for it: the same frame traced with the effect and without it (textures: Sponza, its MTL
+without map_Kd and map_Ka; area lights: CornellBox-Original at 16 spp, its MTL without Ke;
+ambient: the Kitchen's frame 0 with scripts/render-files/bart-kitchen.json and with its own render
+file, which has no ambient light), each the median trace_ms of --repeat runs taken in turn.
 
   scripts/contact_sheet.py --kdray build/kdray [--out docs/scene-effects] [--repeat 3]
 """
@@ -22,32 +25,37 @@ import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_common import ROOT, SHARED, median, run_record  # noqa
 
-TILE = (384, 288)
-# scene folder, OBJ, what the render file gains, why
+TILE = "384x288"
+RENDER_FILES = os.path.join(ROOT, "scripts", "render-files")
+# scene folder, OBJ, render file (None: the scene's own), options beyond the tile's size, what it shows
 SHOTS = [
-    ("sponza-dabrovic", "sponza.obj", {"ambient": 0.3}, "textures (map_Kd) and ambient"),
-    ("cornell-box", "CornellBox-Original.obj", {"image": {"spp": 64}},
+    ("sponza-dabrovic", "sponza.obj", "sponza.json", [],
+     "textures (map_Kd), path-traced: the arcades lit by the light the courtyard reflects"),
+    ("cornell-box", "CornellBox-Original.obj", None, ["--spp", "64"],
      "lit by its emissive panel, soft shadows"),
-    ("bart-kitchen", "frame_000.obj", {"ambient": 0.2}, "BART's ambient term (Ka)"),
-    ("bart-robots", "frame_000.obj", {"ambient": 0.2}, "BART's ambient term (Ka)"),
+    ("bart-kitchen", "frame_000.obj", "bart-kitchen.json", [], "BART's ambient term (Ka)"),
+    ("bart-robots", "frame_000.obj", "bart-robots.json", [], "BART's ambient term (Ka)"),
 ]
 
 
-def merged(base, extra):
-    out = dict(base)
-    for key, value in extra.items():
-        out[key] = merged(out.get(key, {}), value) if isinstance(value, dict) else value
-    return out
+def scene_render_file(folder, shipped):
+    return os.path.join(RENDER_FILES, shipped) if shipped else \
+        os.path.join(SHARED, "scenes", folder, "render.json")
 
 
-def render_once(kdray, obj, render, out):
-    result = subprocess.run([kdray, "render", obj, "--camera", render, "-o", out, "-q",
-                             "--overwrite"],
-                            capture_output=True, text=True)
+def render_once(kdray, obj, render_file, options, out):
+    """One `kdray render` into `out`: its frame record, and the command as a user types it from
+    the repository root (the output folder shown as out/)."""
+    command = [kdray, "render", obj, "--render-file", render_file, *options, "-o", out, "-q",
+               "--overwrite"]
+    result = subprocess.run(command, capture_output=True, text=True)
     if result.returncode != 0:
         sys.exit(f"contact_sheet: {obj}: {result.stderr.strip()}")
     with open(os.path.join(out, "stats.json")) as f:
-        return json.load(f)["frames"][0]
+        frame = json.load(f)["frames"][0]
+    shown = [os.path.relpath(a, ROOT) if os.path.isabs(a) else a for a in command[1:]]
+    shown[shown.index("-o") + 1] = "out/"
+    return frame, "build/kdray " + " ".join(a for a in shown if a not in ("-q", "--overwrite"))
 
 
 def scene_copy(folder, obj, tmp, drop):
@@ -68,36 +76,28 @@ def scene_copy(folder, obj, tmp, drop):
 
 def effect_costs(kdray, tmp, repeat):
     """Per effect: the trace time of a frame that calls for it, with the effect and without."""
-    def render_file(folder, extra):
-        with open(os.path.join(SHARED, "scenes", folder, "render.json")) as f:
-            render = json.load(f)
-        if isinstance(render.get("camera"), list):
-            render["camera"] = {k: v for k, v in render["camera"][0].items() if k != "frame"}
-        render = merged(render, extra)
-        path = os.path.join(tmp, f"cost-{folder}-{len(os.listdir(tmp))}.json")
-        with open(path, "w") as f:
-            json.dump(render, f)
-        return path
-
+    # effect, folder, OBJ, render file with it, without it (None: the scene's own), options,
+    # MTL statements dropped for the frame without it
     cases = [
-        ("textures", "sponza-dabrovic", "sponza.obj", {}, {}, ("map_Kd", "map_Ka")),
-        ("area_lights", "cornell-box", "CornellBox-Original.obj", {"image": {"spp": 16}},
-         {"image": {"spp": 16}}, ("Ke",)),
-        ("ambient", "bart-kitchen", "frame_000.obj", {"ambient": 0.2}, {}, ()),
+        ("textures", "sponza-dabrovic", "sponza.obj", None, None, [], ("map_Kd", "map_Ka")),
+        ("area_lights", "cornell-box", "CornellBox-Original.obj", None, None, ["--spp", "16"],
+         ("Ke",)),
+        ("ambient", "bart-kitchen", "frame_000.obj", "bart-kitchen.json", None, [], ()),
     ]
     rows = []
-    for effect, folder, obj, with_extra, without_extra, drop in cases:
+    for effect, folder, obj, with_file, without_file, options, drop in cases:
         with_obj = os.path.join(SHARED, "scenes", folder, obj)
         without_obj = scene_copy(folder, obj, tmp, drop) if drop else with_obj
-        with_render, without_render = render_file(folder, with_extra), render_file(folder,
-                                                                                   without_extra)
+        with_render = scene_render_file(folder, with_file)
+        without_render = scene_render_file(folder, without_file)
         on, off = [], []
         for _ in range(repeat):
-            frame = render_once(kdray, with_obj, with_render, os.path.join(tmp, "on"))
+            frame, _ = render_once(kdray, with_obj, with_render, options, os.path.join(tmp, "on"))
             if not frame["effects"].get(effect):
                 sys.exit(f"contact_sheet: {folder} does not call for {effect}")
             on.append(frame["trace_ms"])
-            frame = render_once(kdray, without_obj, without_render, os.path.join(tmp, "off"))
+            frame, _ = render_once(kdray, without_obj, without_render, options,
+                                   os.path.join(tmp, "off"))
             if frame["effects"].get(effect):
                 sys.exit(f"contact_sheet: {folder} still calls for {effect} without it")
             off.append(frame["trace_ms"])
@@ -119,28 +119,13 @@ def main():
         sys.exit("contact_sheet: ../shared/scenes is absent")
     tiles, records = [], []
     with tempfile.TemporaryDirectory(prefix="kdray-sheet-") as tmp:
-        for folder, obj, extra, why in SHOTS:
-            path = os.path.join(SHARED, "scenes", folder)
-            with open(os.path.join(path, "render.json")) as f:
-                render = json.load(f)
-            if isinstance(render.get("camera"), list):  # a keyframed camera: its first key
-                render["camera"] = {k: v for k, v in render["camera"][0].items() if k != "frame"}
-            render = merged(render, extra)
-            render.setdefault("image", {}).update(width=TILE[0], height=TILE[1])
-            render_path = os.path.join(tmp, f"{folder}.json")
-            with open(render_path, "w") as f:
-                json.dump(render, f)
+        for folder, obj, shipped, options, why in SHOTS:
             out = os.path.join(tmp, folder)
-            result = subprocess.run([args.kdray, "render", os.path.join(path, obj), "--camera",
-                                     render_path, "-o", out, "-q", "--overwrite"],
-                                    capture_output=True, text=True)
-            if result.returncode != 0:
-                sys.exit(f"contact_sheet: {folder}: {result.stderr.strip()}")
-            with open(os.path.join(out, "stats.json")) as f:
-                frame = json.load(f)["frames"][0]
-            stem = os.path.splitext(obj)[0]
-            tiles.append(os.path.join(out, stem + ".png"))
-            records.append({"scene": f"{folder}/{obj}", "shows": why, "render_file_adds": extra,
+            frame, command = render_once(
+                args.kdray, os.path.join(SHARED, "scenes", folder, obj),
+                scene_render_file(folder, shipped), ["--size", TILE, *options], out)
+            tiles.append(os.path.join(out, os.path.splitext(obj)[0] + ".png"))
+            records.append({"scene": f"{folder}/{obj}", "shows": why, "command": command,
                             "effects": frame["effects"], "rays": frame["rays"],
                             "trace_ms": frame["trace_ms"],
                             "warnings": len(frame["scene"].get("warnings", []))})
