@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """A contact sheet of the scene effects on the shared scenes: Sponza path-traced with its textures,
-the Cornell box lit by its ceiling panel (soft shadows), the BART Kitchen and Robots with their
+the Cornell box path-traced, lit by its ceiling panel, the BART Kitchen and Robots with their
 ambient term. Each tile is one `kdray render` a user can type: the scene, a render file that is
 either the scene's own (../shared/scenes/*/render.json) or one kdray ships for it
 (scripts/render-files/*.json, for what the shared file lacks: the path integrator, ambient light),
@@ -31,8 +31,8 @@ RENDER_FILES = os.path.join(ROOT, "scripts", "render-files")
 SHOTS = [
     ("sponza-dabrovic", "sponza.obj", "sponza.json", [],
      "textures (map_Kd), path-traced: the arcades lit by the light the courtyard reflects"),
-    ("cornell-box", "CornellBox-Original.obj", None, ["--spp", "64"],
-     "lit by its emissive panel, soft shadows"),
+    ("cornell-box", "CornellBox-Original.obj", "cornell-box-path.json", [],
+     "lit by its emissive panel, path-traced: soft shadows, the walls' colours on the boxes"),
     ("bart-kitchen", "frame_000.obj", "bart-kitchen.json", [], "BART's ambient term (Ka)"),
     ("bart-robots", "frame_000.obj", "bart-robots.json", [], "BART's ambient term (Ka)"),
 ]
