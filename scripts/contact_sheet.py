@@ -117,6 +117,8 @@ def main():
     args = parser.parse_args()
     if not os.path.isdir(os.path.join(SHARED, "scenes")):
         sys.exit("contact_sheet: ../shared/scenes is absent")
+    # Taken before the picture is written, which would mark the commit dirty.
+    record = run_record(args.kdray)
     tiles, records = [], []
     with tempfile.TemporaryDirectory(prefix="kdray-sheet-") as tmp:
         for folder, obj, shipped, options, why in SHOTS:
@@ -134,7 +136,7 @@ def main():
                         args.out + ".png"], check=True)
         costs = effect_costs(args.kdray, tmp, args.repeat)
     with open(args.out + ".json", "w") as f:
-        json.dump({**run_record(args.kdray), "tile": TILE, "shots": records, "effect_costs": costs}, f, indent=1)
+        json.dump({**record, "tile": TILE, "shots": records, "effect_costs": costs}, f, indent=1)
         f.write("\n")
     print(f"wrote {args.out}.png and .json", file=sys.stderr)
 
