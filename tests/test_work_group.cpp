@@ -7,6 +7,7 @@
 
 #include <string>
 
+#include "cl/renderer/opencl_renderer.h"
 #include "cl/runtime/program_cache.h"
 #include "cl/runtime/work_group.h"
 #include "core/device/kd_build_shared.h"
@@ -84,4 +85,19 @@ TEST_CASE("a kernel on this device: its limits are read and 64 fits the builder'
     CHECK(l.device_local_bytes > 0);
     CHECK(choose_group_1d("kd_fill_uint", l, KDRAY_LAUNCH_GROUP) ==
           std::min<std::size_t>(KDRAY_LAUNCH_GROUP, l.kernel_max_group));
+}
+
+TEST_CASE("pixel tile: one pixel per group for the path integrator on a CPU device, else 8x8") {
+    // PoCL runs a work-group as a loop over its work-items, which cost the path kernel 6-10% of
+    // its time (opencl_renderer.cpp); a GPU keeps its square tiles for coherent SIMD lanes.
+    OpenClRenderChoice path, whitted;
+    path.effects = KDRAY_EFFECT_PATH | KDRAY_EFFECT_AREA_LIGHTS;
+    whitted.effects = KDRAY_EFFECT_SHADOWS | KDRAY_EFFECT_AREA_LIGHTS;
+    const Tile cpu_path = preferred_pixel_tile(true, path);
+    CHECK(cpu_path.width * cpu_path.height == 1u);
+    for (const Tile t : {preferred_pixel_tile(false, path), preferred_pixel_tile(true, whitted),
+                         preferred_pixel_tile(false, whitted)}) {
+        CHECK(t.width == 8u);
+        CHECK(t.height == 8u);
+    }
 }

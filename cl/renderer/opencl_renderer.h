@@ -52,13 +52,17 @@ kd_u32 render_packet_lanes(const ClDevice& device);
 /// "fp64" or "float-float", as stats.json and the log name the path.
 const char* exact_arithmetic_name(bool fp64);
 
+/// The pixel kernel's work-group before the device's limits: 8x8 pixels, one pixel for a path
+/// program on a CPU device.
+Tile preferred_pixel_tile(bool cpu_device, const OpenClRenderChoice& choice);
+
 /// A choice's kernels, created from its render program (built once per effects combination and
 /// triangle test by cl/runtime/program_cache); packet and shadow only where the choice uses them.
 struct OpenClRenderPlan {
     OpenClRenderChoice choice;
     cl::Kernel pixel, packet, shadow, cost;
     /// The pixel kernel's tile and the packet kernels' tiles per group, from the device's limits
-    /// (cl/runtime/work_group.h): 8x8 and 4 where allowed.
+    /// (cl/runtime/work_group.h): preferred_pixel_tile and 4 where allowed.
     Tile tile;
     std::size_t packet_group = 0;
 };

@@ -39,7 +39,7 @@
 
 /* A unit-length basis (t, b, n) around the unit vector n, without a branch on which axis to
  * cross with (Duff et al., "Building an orthonormal basis, revisited", JCGT 2017). */
-KDRAY_INLINE void kd_path_basis(const kd_f32* n, kd_f32* t, kd_f32* b) {
+KDRAY_HOT_INLINE void kd_path_basis(const kd_f32* n, kd_f32* t, kd_f32* b) {
     const kd_f32 sign = n[2] >= 0.0f ? 1.0f : -1.0f;
     const kd_f32 a = -1.0f / (sign + n[2]);
     const kd_f32 c = n[0] * n[1] * a;
@@ -48,7 +48,7 @@ KDRAY_INLINE void kd_path_basis(const kd_f32* n, kd_f32* t, kd_f32* b) {
 }
 
 /* The direction (x, y, z) of the frame around n, in the scene. */
-KDRAY_INLINE void kd_path_to_world(const kd_f32* n, kd_f32 x, kd_f32 y, kd_f32 z, kd_f32* out) {
+KDRAY_HOT_INLINE void kd_path_to_world(const kd_f32* n, kd_f32 x, kd_f32 y, kd_f32 z, kd_f32* out) {
     kd_f32 t[3], b[3];
     kd_path_basis(n, t, b);
     for (int a = 0; a < 3; ++a) out[a] = x * t[a] + y * b[a] + z * n[a];
@@ -225,17 +225,19 @@ KDRAY_HOT_INLINE int kd_path_sample_lobes(const KdSceneView* scene, const KdView
     if (u < l->p_diffuse + l->p_gloss) {
         if (u < l->p_diffuse) {
             /* Cosine-weighted about ns (Malley's method). */
-            const kd_f32 r = KDRAY_SQRT(u1), phi = 2.0f * KDRAY_PI * u2;
-            kd_path_to_world(ns, r * KDRAY_COS(phi), r * KDRAY_SIN(phi),
-                             KDRAY_SQRT(KDRAY_FMAX(0.0f, 1.0f - u1)), wi);
+            const kd_f32 r = KDRAY_SQRT(u1);
+            kd_f32 sin_phi, cos_phi;
+            kd_sincos_turn(u2, &sin_phi, &cos_phi);
+            kd_path_to_world(ns, r * cos_phi, r * sin_phi, KDRAY_SQRT(KDRAY_FMAX(0.0f, 1.0f - u1)),
+                             wi);
         } else {
             /* A half vector about ns, cos_h = u1^(1 / (Ns + 1)), and wi the mirror of -dir. */
             const kd_f32 cos_h =
                 kd_pow_positive(KDRAY_FMAX(u1, 1e-30f), 1.0f / (l->shininess + 1.0f));
             const kd_f32 sin_h = KDRAY_SQRT(KDRAY_FMAX(0.0f, 1.0f - cos_h * cos_h));
-            const kd_f32 phi = 2.0f * KDRAY_PI * u2;
-            kd_f32 h[3];
-            kd_path_to_world(ns, sin_h * KDRAY_COS(phi), sin_h * KDRAY_SIN(phi), cos_h, h);
+            kd_f32 h[3], sin_phi, cos_phi;
+            kd_sincos_turn(u2, &sin_phi, &cos_phi);
+            kd_path_to_world(ns, sin_h * cos_phi, sin_h * sin_phi, cos_h, h);
             kd_reflect(dir, h, -kd_dot3(dir, h), wi);
             kd_normalize3(wi);
         }

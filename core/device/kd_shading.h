@@ -20,8 +20,6 @@
 #define KDRAY_EXP2 exp2
 #define KDRAY_LOG2 log2
 #define KDRAY_FLOOR floor
-#define KDRAY_COS cos
-#define KDRAY_SIN sin
 #define KDRAY_ISFINITE isfinite
 #else
 #define KDRAY_EFFECT_ON(view, bit) (((view)->effects & (bit)) != 0u)
@@ -29,8 +27,6 @@
 #define KDRAY_EXP2 std::exp2
 #define KDRAY_LOG2 std::log2
 #define KDRAY_FLOOR std::floor
-#define KDRAY_COS std::cos
-#define KDRAY_SIN std::sin
 #define KDRAY_ISFINITE std::isfinite
 #endif
 
@@ -152,6 +148,27 @@ KDRAY_HOT_INLINE kd_f32 kd_pow_positive(kd_f32 x, kd_f32 y) {
     return KDRAY_EXP2(y * KDRAY_LOG2(x));
 }
 
+/* sin and cos of the angle 2 pi u (a fraction of a turn, u in [0, 1)) on both sides, within
+ * about an ulp: the turn's nearest quarter k is exact (4 u - k in [-1/2, 1/2]), and the rest, at
+ * most pi / 4, takes the Taylor series to the term below float's precision. PoCL's sin and cos
+ * each reduced their argument in a call of their own (__pocl_argReductionS: 5% of the path
+ * kernel's time); this is a few multiplies, and host and kernel compute the same floats. */
+KDRAY_HOT_INLINE void kd_sincos_turn(kd_f32 u, kd_f32* sin_out, kd_f32* cos_out) {
+    const kd_f32 x = 4.0f * u, k = KDRAY_FLOOR(x + 0.5f);
+    const kd_f32 a = (x - k) * (0.5f * KDRAY_PI), a2 = a * a;
+    const kd_f32 s =
+        a + a * a2 *
+                (-1.0f / 6.0f +
+                 a2 * (1.0f / 120.0f + a2 * (-1.0f / 5040.0f + a2 * (1.0f / 362880.0f))));
+    const kd_f32 c =
+        1.0f + a2 * (-0.5f + a2 * (1.0f / 24.0f +
+                                   a2 * (-1.0f / 720.0f +
+                                         a2 * (1.0f / 40320.0f + a2 * (-1.0f / 3628800.0f)))));
+    const kd_i32 quarter = (kd_i32)k & 3;
+    *sin_out = quarter == 0 ? s : (quarter == 1 ? c : (quarter == 2 ? -s : -c));
+    *cos_out = quarter == 0 ? c : (quarter == 1 ? -s : (quarter == 2 ? -c : s));
+}
+
 /* A 32-bit integer hash (Wellons' lowbias32): decorrelated jitter without per-pixel state. The
  * steps are a macro so that a kernel can hash a vector of 32-bit lanes with the same code. */
 #define KDRAY_LOWBIAS32(x) \
@@ -182,6 +199,12 @@ typedef struct KdSampleRandom {
     kd_u32 count;
     kd_u32 dimension;
     kd_u32 independent;
+    /* The last pair drawn from, plus 1 (0: none yet), its rotation and its permuted index: both
+     * coordinates of a pair share them, and the hashes and kd_permute were a sixth of a path
+     * kernel's time when each number computed them anew. */
+    kd_u32 cached_pair;
+    kd_u32 pair_rotation;
+    kd_u32 pair_index;
 } KdSampleRandom;
 
 /* A permutation of [0, n), chosen by `seed`, applied to i < n: Kensler's hash-based permutation
@@ -217,14 +240,18 @@ KDRAY_INLINE kd_u32 kd_permute(kd_u32 i, kd_u32 n, kd_u32 seed) {
     return (i + seed) % n;
 }
 
-KDRAY_INLINE kd_f32 kd_sample_uniform(KdSampleRandom* r) {
+KDRAY_HOT_INLINE kd_f32 kd_sample_uniform(KdSampleRandom* r) {
     const kd_u32 d = r->dimension++;
     if (r->independent) return kd_unit_float(kd_hash(r->key ^ kd_hash((d + 1u) * 0x9E3779B9u)));
-    const kd_u32 pair = kd_hash(r->key ^ kd_hash((d >> 1) * 0x9E3779B9u + 0x632BE5ABu));
-    /* Both coordinates of a pair take the same point, so that the pair stays an R2 point. */
-    const kd_u32 index = r->count > 1u ? kd_permute(r->sample, r->count, pair) : r->sample;
-    const kd_u32 rotation = (d & 1u) ? kd_hash(pair) : pair;
-    return kd_unit_float(rotation + index * ((d & 1u) ? KDRAY_R2_STEP1 : KDRAY_R2_STEP0));
+    if (r->cached_pair != (d >> 1) + 1u) {
+        const kd_u32 pair = kd_hash(r->key ^ kd_hash((d >> 1) * 0x9E3779B9u + 0x632BE5ABu));
+        r->cached_pair = (d >> 1) + 1u;
+        r->pair_rotation = pair;
+        /* Both coordinates of a pair take the same point, so that the pair stays an R2 point. */
+        r->pair_index = r->count > 1u ? kd_permute(r->sample, r->count, pair) : r->sample;
+    }
+    const kd_u32 rotation = (d & 1u) ? kd_hash(r->pair_rotation) : r->pair_rotation;
+    return kd_unit_float(rotation + r->pair_index * ((d & 1u) ? KDRAY_R2_STEP1 : KDRAY_R2_STEP0));
 }
 
 /* The random numbers of sample s of pixel (x, y) for the integrator `salt` names: a key of their
@@ -240,6 +267,7 @@ KDRAY_INLINE void kd_sample_random(const KdView* view, kd_u32 x, kd_u32 y, kd_u3
     r->sample = s;
     r->count = view->spp;
     r->dimension = 0u;
+    r->cached_pair = r->pair_rotation = r->pair_index = 0u;
 }
 
 /* Geometric unit normal of a triangle, facing against `dir`. */
