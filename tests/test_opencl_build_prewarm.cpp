@@ -114,10 +114,15 @@ TEST_CASE("opencl builder: a first build takes the buffers made ahead for its tr
                           << cold.device_bytes << " and " << ready.device_bytes);
         // The buffers made ahead are most of what a first build would make: when a size is off
         // (a request above a buffer, or under half of it) the build makes its own again.
-        if (c.estimated) CHECK(ready_allocated < cold_allocated * 2 / 5);
+        // The masks and the first-pass records are each over a quarter of what a first build
+        // makes: were either not taken, the build would make over 3/4 of it (sphere 47%, floor
+        // 52% when both are).
+        if (c.estimated) CHECK(ready_allocated < cold_allocated * 3 / 5);
         // Taken a little larger than asked for (up to twice, by another array when the sizes
-        // are off), they raise the peak by a few percent: 4% for the Kitchen, 1% for the bunny.
-        CHECK(ready.device_bytes <= cold.device_bytes * 110 / 100);
+        // are off), they raise the peak: the Kitchen 2%, the bunny 1%, the dragon res2 12%, this
+        // sphere 10% (the masks and records, both held at the small stage, sized for the most
+        // references per triangle that the benchmark scenes' small roots hold).
+        CHECK(ready.device_bytes <= cold.device_bytes * 113 / 100);
         test::check_same_tree(ready_tree, cold_tree, scene, 28);
     }
 }
