@@ -38,6 +38,7 @@ int run_build(const BuildCommand& command) {
     say_when_no_gpu(session, command.builder.device);
     const std::unique_ptr<TreeBuilder> builder = make_tree_builder(
         command.builder.builder, command.builder.build_params(kStaticBuildQuality), session);
+    builder->expect_triangles(scene.triangle_count());
     builder->prepare();
     const double prepare_ms = ms_since(prepare_start);
     BuiltTree built = builder->build(scene);

@@ -12,6 +12,7 @@
 
 #include "cl/builder/bounds.h"
 #include "cl/builder/build_context.h"
+#include "cl/builder/build_prewarm.h"
 #include "cl/builder/large_level.h"
 #include "cl/builder/output.h"
 #include "cl/builder/small_roots.h"
@@ -69,9 +70,12 @@ struct Build {
 
 }  // namespace
 
-void prepare_opencl_builder(ClDevice& device, const BuildParams& params) {
+void prepare_opencl_builder(ClDevice& device, const BuildParams& params, std::size_t triangles) {
+    // First, so that the device fills the buffers while the host builds (or loads) programs.
+    prewarm_build_buffers(device, triangles);
     builder_kernels(device, supported_params(params).large_split_bins);
     const ClPrimitives primitives(device);
+    if (triangles > 0) warm_up_launches(device, params);
 }
 
 KdTree build_opencl(ClDevice& device, const Scene& scene, const BuildParams& params,

@@ -26,7 +26,11 @@ namespace kdray {
 /// Builds (through cl/program_cache) every OpenCL program build_opencl uses on `device`, so that a
 /// caller can keep program compilation out of its first build's time; a later build_opencl on the
 /// device with the same `params` then builds no program (large_split_bins is compiled in).
-void prepare_opencl_builder(ClDevice& device, const BuildParams& params = {});
+/// `triangles`: the size of the scene the first build will be given, when known (0: unknown),
+/// whose largest buffers are then made and written while the programs build
+/// (build_prewarm.h), so that the first build touches no more fresh pages than a later one.
+void prepare_opencl_builder(ClDevice& device, const BuildParams& params = {},
+                            std::size_t triangles = 0);
 
 /// The tree as it already lies on the device after a build: the preorder nodes, the leaf
 /// indices and the scene's triangles (9 floats each), so that a renderer on the same device need

@@ -7,7 +7,7 @@
 namespace kdray {
 
 void OpenClTreeBuilder::prepare() {
-    prepare_opencl_builder(session_.device(), params_);
+    prepare_opencl_builder(session_.device(), params_, expected_triangles_);
 }
 
 BuiltTree OpenClTreeBuilder::build(const Scene& scene) {

@@ -23,6 +23,7 @@ class OpenClTreeBuilder final : public TreeBuilder {
 
     /// Opens the device and builds the builder's programs (prepare_opencl_builder).
     void prepare() override;
+    void expect_triangles(std::size_t triangles) override { expected_triangles_ = triangles; }
     BuiltTree build(const Scene& scene) override;
     std::string description() override;
     std::string quality() override;
@@ -31,6 +32,7 @@ class OpenClTreeBuilder final : public TreeBuilder {
   private:
     DeviceSession& session_;
     BuildParams params_;
+    std::size_t expected_triangles_ = 0;
 };
 
 }  // namespace kdray

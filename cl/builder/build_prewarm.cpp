@@ -1,0 +1,86 @@
+// build_prewarm.cpp — the first build's large buffers made ahead (build_prewarm.h).
+#include "cl/builder/build_prewarm.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "cl/runtime/cl_error.h"
+
+namespace kdray::build_detail {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Below this many triangles a build's arrays are a few hundred pages: not worth a buffer each.
+constexpr std::size_t kPrewarmMinTriangles = 4096;
+
+/// Bytes per triangle of each buffer: above the most a build asked for on the benchmark scenes
+/// (`kdray build`, default quality; Kitchen, Robots, bunny, dragon res2 and res4, teapot), and
+/// under twice the least, so that each scene's request fits (BufferPool::take keeps a buffer
+/// for requests of half its size and more). Asked for, per triangle: masks 200-230 (128 bytes
+/// per small-root reference), first-pass small node records 255-294 (10 KdSmallNode per
+/// reference and root), the triangles (36) and their boxes (24) exactly: with 500-600 bytes of
+/// the 800-900 per triangle that a first build makes afresh. Left out, since a request of
+/// another array takes them first when they are made ahead (the pool matches by size): the
+/// child boxes (48-61), output nodes (50-66) and leaf indices (15-22), which on the dragon raised
+/// the peak by 13% and the page faults too; the small roots' growing arrays and the large
+/// stage's per-level ones, whose sizes follow the splits.
+struct PerTriangle {
+    const char* what;
+    std::size_t bytes;
+};
+constexpr PerTriangle kPerTriangle[] = {
+    {"candidate masks", 240},
+    {"small node records", 300},
+    {"triangles", 36},
+    {"triangle boxes", 24},
+};
+
+}  // namespace
+
+std::vector<ExpectedBuffer> expected_build_buffers(std::size_t triangles) {
+    std::vector<ExpectedBuffer> buffers;
+    if (triangles < kPrewarmMinTriangles) return buffers;
+    for (const PerTriangle& p : kPerTriangle) buffers.push_back({p.what, p.bytes * triangles});
+    return buffers;
+}
+
+std::size_t prewarm_build_buffers(ClDevice& device, std::size_t triangles) {
+    std::size_t made = 0;
+    for (const ExpectedBuffer& expected : expected_build_buffers(triangles)) {
+        // A buffer the device could not make is one the build will fail to make too, with its
+        // own error: here it is only left out.
+        if (expected.bytes > device.info().max_alloc_bytes) continue;
+        // The widest pattern OpenCL allows: PoCL fills pattern by pattern, and 4-byte patterns
+        // took 100 ms for the Kitchen's 80 MB.
+        const std::size_t bytes =
+            (expected.bytes + sizeof(cl_ulong16) - 1) / sizeof(cl_ulong16) * sizeof(cl_ulong16);
+        cl::Buffer buffer = device.allocate(bytes, expected.what);
+        with_cl_context(std::string("filling ") + expected.what + " ahead of the first build",
+                        [&] { device.queue().enqueueFillBuffer(buffer, cl_ulong16{}, 0, bytes); });
+        device.buffer_pool().keep(std::move(buffer), bytes);
+        made += bytes;
+    }
+    return made;
+}
+
+void warm_up_launches(ClDevice& device, const BuildParams& params) {
+    // A UV sphere of 2 * 8 * 16 triangles: more than a large node holds, so both stages and the
+    // output run, yet a build of under a millisecond once its kernels are loaded.
+    constexpr int kRings = 8, kSegments = 16;
+    std::vector<float> tris;
+    auto point = [&](int ring, int segment) {
+        const double theta = kPi * ring / kRings, phi = 2 * kPi * segment / kSegments;
+        tris.insert(tris.end(), {float(std::sin(theta) * std::cos(phi)), float(std::cos(theta)),
+                                 float(std::sin(theta) * std::sin(phi))});
+    };
+    for (int r = 0; r < kRings; ++r)
+        for (int g = 0; g < kSegments; ++g) {
+            point(r, g), point(r + 1, g), point(r + 1, g + 1);
+            point(r, g), point(r + 1, g + 1), point(r, g + 1);
+        }
+    build_opencl(device, make_scene(std::move(tris), "builder warm-up sphere"), params);
+}
+
+}  // namespace kdray::build_detail
