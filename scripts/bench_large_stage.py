@@ -90,7 +90,7 @@ def main():
         "a CPU device a work-group's items run one after another, so the level shape's barriers "
         "and local arrays are pure overhead there: auto picks `chunked` on CPUs and `level` on "
         "GPUs. GPU figures come from the device bundle (scripts/device-check.sh) when a GPU is "
-        "lent.",
+        "lent: [bench-gpu.md](bench-gpu.md) builds the Kitchen at medium with each shape.",
     ]
     write_markdown(args.out, lines)
     return 0

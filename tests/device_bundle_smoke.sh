@@ -51,5 +51,13 @@ if [ ${#scenes[@]} = 0 ]; then
     echo "device_bundle_smoke: device-check.sh --quick took $seconds s on PoCL"
     [ "$seconds" -lt 300 ] || fail "device-check.sh --quick took $seconds s, over 5 minutes"
     grep -q '"failures": 0' "$work/check/summary.json" || fail "failures in summary.json"
+    # The report docs/bench-gpu is made from such a folder: every build and correctness case the
+    # check wrote gets its row.
+    python3 "$src/scripts/device_report.py" "$work/check" --commit test --out "$work/report" \
+        >/dev/null || fail "device_report.py failed on the check's output"
+    builds=$(ls "$work/check/bench"/build-*.json | wc -l)
+    rows=$(python3 -c "import json, sys; r = json.load(open(sys.argv[1])); print(len(r['builds']), len(r['correctness']), all(c['agree'] for c in r['correctness']))" "$work/report.json")
+    [ "$rows" = "$builds $(ls "$work/check/correctness"/*.json | grep -vc '\.stats\.json$') True" ] ||
+        fail "device_report.py: rows '$rows' for $builds builds"
 fi
 echo "device_bundle_smoke: bundle of $bytes bytes passed"
