@@ -18,22 +18,6 @@ using namespace kdray;
 
 namespace {
 
-/// A closed surface: a UV sphere of 2 * rings * segments triangles.
-Scene sphere(int rings, int segments) {
-    std::vector<float> tris;
-    auto point = [&](int ring, int segment) {
-        const double theta = M_PI * ring / rings, phi = 2 * M_PI * segment / segments;
-        tris.insert(tris.end(), {float(std::sin(theta) * std::cos(phi)), float(std::cos(theta)),
-                                 float(std::sin(theta) * std::sin(phi))});
-    };
-    for (int r = 0; r < rings; ++r)
-        for (int g = 0; g < segments; ++g) {
-            point(r, g), point(r + 1, g), point(r + 1, g + 1);
-            point(r, g), point(r + 1, g + 1), point(r, g + 1);
-        }
-    return make_scene(std::move(tris), "sphere");
-}
-
 /// A flat, finely tessellated floor with a few hundred boxes standing on it (an architectural
 /// scene's shape: large flat triangles' neighbours and many small separate objects).
 Scene floor_and_boxes(int cells, int boxes) {
@@ -88,8 +72,9 @@ TEST_CASE("opencl builder: a first build takes the buffers made ahead for its tr
         Scene scene;
         bool estimated;  // of the shapes the estimate is for
     };
-    for (const Case& c : {Case{sphere(100, 100), true}, Case{floor_and_boxes(60, 600), true},
-                          Case{random_slivers(6000), false}}) {
+    for (const Case& c :
+         {Case{build_detail::uv_sphere(100, 100), true}, Case{floor_and_boxes(60, 600), true},
+          Case{random_slivers(6000), false}}) {
         const Scene& scene = c.scene;
         CAPTURE(scene.path);
         const std::size_t n = scene.triangle_count();

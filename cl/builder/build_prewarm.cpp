@@ -65,22 +65,25 @@ std::size_t prewarm_build_buffers(ClDevice& device, std::size_t triangles) {
     return made;
 }
 
-void warm_up_launches(ClDevice& device, const BuildParams& params) {
-    // A UV sphere of 2 * 8 * 16 triangles: more than a large node holds, so both stages and the
-    // output run, yet a build of under a millisecond once its kernels are loaded.
-    constexpr int kRings = 8, kSegments = 16;
+Scene uv_sphere(int rings, int segments) {
     std::vector<float> tris;
     auto point = [&](int ring, int segment) {
-        const double theta = kPi * ring / kRings, phi = 2 * kPi * segment / kSegments;
+        const double theta = kPi * ring / rings, phi = 2 * kPi * segment / segments;
         tris.insert(tris.end(), {float(std::sin(theta) * std::cos(phi)), float(std::cos(theta)),
                                  float(std::sin(theta) * std::sin(phi))});
     };
-    for (int r = 0; r < kRings; ++r)
-        for (int g = 0; g < kSegments; ++g) {
+    for (int r = 0; r < rings; ++r)
+        for (int g = 0; g < segments; ++g) {
             point(r, g), point(r + 1, g), point(r + 1, g + 1);
             point(r, g), point(r + 1, g + 1), point(r, g + 1);
         }
-    build_opencl(device, make_scene(std::move(tris), "builder warm-up sphere"), params);
+    return make_scene(std::move(tris), "sphere");
+}
+
+void warm_up_launches(ClDevice& device, const BuildParams& params) {
+    // 2 * 8 * 16 triangles: more than a large node holds, so both stages and the output run, yet
+    // a build of under a millisecond once its kernels are loaded.
+    build_opencl(device, uv_sphere(8, 16), params);
 }
 
 }  // namespace kdray::build_detail

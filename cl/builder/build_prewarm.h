@@ -32,6 +32,10 @@ std::vector<ExpectedBuffer> expected_build_buffers(std::size_t triangles);
 /// Returns the bytes made.
 std::size_t prewarm_build_buffers(ClDevice& device, std::size_t triangles);
 
+/// A closed surface: a unit UV sphere of 2 * rings * segments triangles (the warm-up's scene, and
+/// a test's).
+Scene uv_sphere(int rings, int segments);
+
 /// Builds a small generated scene with `params`, so that each of the builder's kernels has been
 /// launched once: a first launch costs more than a later one (PoCL compiles or loads the kernel's
 /// work-group function then), about 1 ms of the CornellBox's 1.8 ms first build against 0.6 ms.
