@@ -205,12 +205,11 @@ class RenderLog final : public RenderRunObserver {
             effects_said_);
         // The scene asks for an ambient term the render file does not give: its shadows will be
         // black, which a user would otherwise take for a bug (#30).
-        const std::string ambient_reason = effects["reasons"].value("ambient", std::string());
-        if (ambient_reason.find(", though material") != std::string::npos)
+        if (effects.value("ambient_unlit", false))
             spdlog::info(
                 "no ambient term: {}; an \"ambient\" in the render file lights the "
                 "shadows (docs/effects.md)",
-                ambient_reason);
+                effects["reasons"].value("ambient", std::string()));
         // The hits are as exact either way (to a near-tie of floats); said once, since a user
         // comparing devices may ask why stats.json's exact_arithmetic differs.
         if (tracer->exact_arithmetic() != "fp64")

@@ -227,6 +227,7 @@ TEST_CASE("a scene whose materials reflect ambient light, rendered without any, 
     REQUIRE(none.status == 0);
     CHECK(none.err.find("no ambient term: the render file has no ambient light, though material "
                         "'lit' reflects it (Ka > 0)") != std::string::npos);
+    CHECK(read_json(dir / "none" / "stats.json")["frames"][0]["effects"]["ambient_unlit"] == true);
     // With ambient light there is nothing to say, and the term is simulated.
     const fs::path render_file =
         write_text_file(dir / "render.json", "{\"ambient\": [0.2, 0.2, 0.2]}");
@@ -234,5 +235,6 @@ TEST_CASE("a scene whose materials reflect ambient light, rendered without any, 
     REQUIRE(lit.status == 0);
     CHECK(lit.err.find("no ambient term") == std::string::npos);
     CHECK(read_json(dir / "lit" / "stats.json")["frames"][0]["effects"]["ambient"] == true);
+    CHECK(read_json(dir / "lit" / "stats.json")["frames"][0]["effects"]["ambient_unlit"] == false);
     fs::remove_all(dir);
 }

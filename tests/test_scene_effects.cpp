@@ -113,6 +113,8 @@ TEST_CASE("ambient: a hit adds Ka x ambient, exactly where nothing else lights i
                 s.materials[0].ambient = {0, 0, 0};
             const RenderInputs inputs = prepare_render(s, r, head_on_camera(), 0);
             CHECK_FALSE(inputs.effects.ambient);
+            // Ka with no light to reflect is flagged for render to say; no Ka is not.
+            CHECK(inputs.effects.ambient_unlit == (which == 0));
             CHECK((inputs.effects.bits() & KDRAY_EFFECT_AMBIENT) == 0u);
             CHECK(inputs.effects.to_json()["reasons"]["ambient"] ==
                   (which == 0 ? "the render file has no ambient light, though material '" +

@@ -23,6 +23,7 @@ nlohmann::json Effects::to_json() const {
             {"area_lights", area_lights},
             {"textures", textures},
             {"path", path},
+            {"ambient_unlit", ambient_unlit},
             {"reasons",
              {{"shadows", shadows_reason},
               {"reflection", reflection_reason},
@@ -68,6 +69,7 @@ Effects decide_effects(const Scene& scene, const RenderSettings& settings) {
     } else if (!(light.x > 0 || light.y > 0 || light.z > 0)) {
         // A material with Ka asks for an ambient term the render file does not give: said, so
         // that a user sees why the scene's shadows are black (the shared BART scenes).
+        e.ambient_unlit = ambient != nullptr;
         e.ambient_reason = ambient ? "the render file has no ambient light, though material '" +
                                          ambient->name + "' reflects it (Ka > 0)"
                                    : "the render file has no ambient light";

@@ -26,6 +26,9 @@ struct Effects {
     bool area_lights = false, textures = false;
     /// The path integrator (kd_path.h) in place of Whitted's ray tree.
     bool path = false;
+    /// A material reflects ambient light (Ka > 0) but Whitted's integrator has none to give it:
+    /// the scene's shadows stay black, which render says once (ambient_reason names the material).
+    bool ambient_unlit = false;
     std::string shadows_reason, reflection_reason, refraction_reason, ambient_reason;
     std::string area_lights_reason, textures_reason, path_reason;
 
