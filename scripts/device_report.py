@@ -109,7 +109,8 @@ def main():
         devices = load(os.path.join(folder, "info", "devices.json"))
         with open(os.path.join(folder, "info", "version.txt")) as f:
             version = f.read().strip()
-        machine = open(os.path.join(folder, "info", "machine.txt")).read().strip().splitlines()
+        with open(os.path.join(folder, "info", "machine.txt")) as f:
+            machine = f.read().strip().splitlines()
         record = {"commit": args.commit, "kdray": version,
                   "devices": devices.get("devices", devices), "machine": machine,
                   "check_total_ms": summary["total_ms"], "check_failures": summary["failures"],
