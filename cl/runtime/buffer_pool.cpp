@@ -37,6 +37,15 @@ std::size_t BufferPool::release_oldest() {
     return bytes;
 }
 
+std::size_t BufferPool::move_oldest_into(BufferPool& other) {
+    if (kept_.empty()) return 0;
+    Kept oldest = std::move(kept_.front());
+    kept_.erase(kept_.begin());
+    bytes_ -= oldest.bytes;
+    other.keep(std::move(oldest.buffer), oldest.bytes);
+    return oldest.bytes;
+}
+
 void BufferPool::move_into(BufferPool& other) {
     for (Kept& kept : kept_) other.keep(std::move(kept.buffer), kept.bytes);
     clear();

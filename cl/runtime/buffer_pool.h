@@ -30,6 +30,8 @@ class BufferPool {
     void keep(cl::Buffer buffer, std::size_t bytes);
     /// Releases the oldest kept buffer; returns its size (0 when the pool is empty).
     std::size_t release_oldest();
+    /// Gives the oldest kept buffer to `other`; returns its size (0 when the pool is empty).
+    std::size_t move_oldest_into(BufferPool& other);
     /// Gives every kept buffer to `other`, oldest first.
     void move_into(BufferPool& other);
     /// Releases every kept buffer.

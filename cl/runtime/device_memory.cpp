@@ -59,14 +59,16 @@ DeviceArray DeviceMemory::allocate(std::size_t bytes, const std::string& what, s
 
 void DeviceMemory::recycle(cl::Buffer buffer, std::size_t bytes) {
     spares_.keep(std::move(buffer), bytes);
-    // Spares beyond half of what is in use are given back, oldest first, so that recycling
-    // raises the build's peak only a little while it keeps the buffers of the level before,
-    // which the next level's arrays mostly fit (kernel time 52 -> 30 ms per build; with no bound
-    // it was 30 ms too, but the peak 225 MB). Half rather than all of it: device bytes per
+    // Spares beyond half of what is in use go to the device's pool, oldest first, so that
+    // recycling raises the build's peak only a little while it keeps the buffers of the level
+    // before, which the next level's arrays mostly fit (kernel time 52 -> 30 ms per build; with
+    // no bound it was 30 ms too, but the peak 225 MB). To the pool, not released: the next build
+    // takes them (released, the depth-first large stage's arenas were fresh pages in every
+    // Kitchen build: 5 new buffers of 1-11 MB each, 2 after). Half rather than all of it: device bytes per
     // triangle Kitchen 901 -> 804, Robots 979 -> 889, Sponza 1026 -> 952, build time the same
     // within noise (kdray build --repeat 7, alternated twice, quiet 2-core PoCL).
     while (!closing_ && 2 * spares_.bytes() > current_ - spares_.bytes() && !spares_.empty())
-        current_ -= spares_.release_oldest();
+        current_ -= spares_.move_oldest_into(device_.buffer_pool());
 }
 
 DeviceMemory::~DeviceMemory() {
