@@ -112,11 +112,13 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
         ->check(CLI::IsMember({"auto", "per-root", "per-level"}))
         ->capture_default_str();
     app.add_option("--large-stage", o.large_stage,
-                   "OpenCL builder: how the large-node stage runs, for the same tree: chunked (a "
-                   "work-item walks 256 references of a node in order; CPU devices), level "
+                   "OpenCL builder: how the large-node stage runs, for the same tree: level "
                    "(Zhou et al.'s shape: a work-item per reference, a work-group per 256; GPUs), "
-                   "or auto (level on a GPU, else chunked)")
-        ->check(CLI::IsMember({"auto", "chunked", "level"}))
+                   "chunked (levels too, a work-item walking 256 references of a node in order), "
+                   "depth-first (chunked levels until there are a few nodes per compute unit, then "
+                   "a work-item per node builds its subtree depth first, in cache; CPUs), or auto "
+                   "(level on a GPU, else depth-first)")
+        ->check(CLI::IsMember({"auto", "chunked", "level", "depth-first"}))
         ->capture_default_str();
     app.add_option("--tree-depth", o.params.max_depth,
                    "the kd-tree's depth limit (stats: params.tree_depth; the depth a tree "

@@ -140,6 +140,8 @@ std::string group_of(const std::string& key) {
         {"small_stage", "device"},
         {"large_stage", "device"},
         {"large_node_levels", "device"},
+        {"depth_first_subtrees", "device"},
+        {"depth_first_rounds", "device"},
         {"small_node_levels", "device"},
         {"kernel_launches", "device"},
         {"warnings", "warnings"},

@@ -244,13 +244,19 @@ def scenes(work):
 
 
 # Each case: a scene, kdray's options under Oclgrind. The reference is always the CPU builder and
-# tracer. Qualities, both small stages and both large stages on the scenes whose large stage runs
+# tracer. Qualities, both small stages and every large stage on the scenes whose large stage runs
 # several levels (Oclgrind reports a GPU, so auto picks per-level and level; the CPU shapes are
 # asked for by name).
 CASES = {
     "clusters-high-per-level": ("clusters", ["--quality", "high", "--small-stage", "per-level"]),
+    # The depth-first schedule: the whole scene one deep root (280 triangles, at most 1024 go to
+    # it with T = 64), and with T = 8 (deep roots of at most 128) chunked levels handing the
+    # clusters to it.
     "clusters-low-per-root": ("clusters", ["--quality", "low", "--small-stage", "per-root",
-                                           "--large-stage", "chunked"]),
+                                           "--large-stage", "depth-first"]),
+    "clusters-depth-first-t8": ("clusters", ["--quality", "high", "--small-stage", "per-root",
+                                             "--large-stage", "depth-first",
+                                             "--large-node-threshold", "8"]),
     "coplanar-medium-per-level": ("coplanar", ["--quality", "medium", "--small-stage", "per-level"]),
     "coplanar-high-per-root": ("coplanar", ["--quality", "high", "--small-stage", "per-root",
                                             "--large-stage", "chunked"]),

@@ -50,12 +50,22 @@ TEST_CASE(
     // The large stage: the same, with its own names.
     const nlohmann::json chunked = build_json("chunked", "--large-stage");
     const nlohmann::json level = build_json("level", "--large-stage");
+    const nlohmann::json depth_first = build_json("depth-first", "--large-stage");
     CHECK(chunked["large_stage"] == "chunked");
     CHECK(level["large_stage"] == "level");
+    CHECK(depth_first["large_stage"] == "depth-first");
     CHECK(level["params"]["large_stage"] == "level");
+    CHECK(depth_first["params"]["large_stage"] == "depth-first");
     CHECK(level["nodes"] == chunked["nodes"]);
     CHECK(level["sah_cost"] == chunked["sah_cost"]);
-    CHECK((automatic["large_stage"] == "chunked" || automatic["large_stage"] == "level"));
+    CHECK(depth_first["nodes"] == chunked["nodes"]);
+    CHECK(depth_first["sah_cost"] == chunked["sah_cost"]);
+    // Its own figures, only for the shape that has them.
+    CHECK(depth_first["depth_first_subtrees"].get<int>() > 0);
+    CHECK(depth_first["depth_first_rounds"].get<int>() >= 1);
+    CHECK(!chunked.contains("depth_first_subtrees"));
+    // Auto: level on a GPU, depth-first on a CPU.
+    CHECK((automatic["large_stage"] == "depth-first" || automatic["large_stage"] == "level"));
     r = run_kdray({"build", obj.string(), "--large-stage", "depth"});
     CHECK(r.status == 2);
     CHECK(r.err.find("--large-stage") != std::string::npos);

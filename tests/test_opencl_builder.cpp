@@ -341,9 +341,13 @@ TEST_CASE("opencl builder: a chain of empty-space cuts in one level") {
     const Scene scene = cluster_in_corner();
     check_build(scene, "cluster_in_corner");
     BuildReport report;
-    const KdTree tree = build_opencl(test::opencl_test_device(), scene, median_split(), &report);
+    BuildParams levels = median_split();
+    levels.large_stage = LargeStage::Chunked;  // level by level (depth-first: the same tree)
+    const KdTree tree = build_opencl(test::opencl_test_device(), scene, levels, &report);
     REQUIRE(check_tree(tree, scene).empty());
     CHECK(report.large_node_levels == 2);  // the root; the chain and its median split
+    const KdTree depth_first = build_opencl(test::opencl_test_device(), scene, median_split());
+    test::check_same_tree(depth_first, tree, scene, 17);
     REQUIRE(!kd_node_is_leaf(tree.nodes[0]));
     CHECK(kd_node_split(tree.nodes[0]) == 5.0f);
     const int axes[3] = {1, 2, 0};
@@ -512,17 +516,23 @@ TEST_CASE("opencl builder: a first build allocates about its peak, not a fresh s
     // level: on a CPU device every new byte is a new page that a kernel faults in. Sized exactly,
     // each large level's arrays were a few percent larger than the last (clipping), so none
     // fitted the next: this sphere allocated 2.25 times its peak (the Kitchen 4.6), now 1.5.
+    // The depth-first large stage runs fewer levels and then arenas of its own: the same bound.
     ClDevice& device = test::opencl_test_device();
     const Scene scene = tessellated_sphere(100, 200);
-    device.buffer_pool().clear();
-    const std::uint64_t before = device.allocated_bytes();
-    BuildReport report;
-    build_opencl(device, scene, {}, &report);
-    const std::uint64_t allocated = device.allocated_bytes() - before;
-    INFO("allocated " << allocated << " bytes, peak " << report.device_bytes);
-    REQUIRE(report.large_node_levels >= 8);
-    CHECK(allocated >= report.device_bytes);  // what it held at its peak came from somewhere
-    CHECK(allocated <= 7 * report.device_bytes / 4);
+    for (LargeStage stage : {LargeStage::Chunked, LargeStage::DepthFirst}) {
+        CAPTURE(std::string(large_stage_name(stage)));
+        BuildParams params;
+        params.large_stage = stage;
+        device.buffer_pool().clear();
+        const std::uint64_t before = device.allocated_bytes();
+        BuildReport report;
+        build_opencl(device, scene, params, &report);
+        const std::uint64_t allocated = device.allocated_bytes() - before;
+        INFO("allocated " << allocated << " bytes, peak " << report.device_bytes);
+        if (stage == LargeStage::Chunked) REQUIRE(report.large_node_levels >= 8);
+        CHECK(allocated >= report.device_bytes);  // what it held at its peak came from somewhere
+        CHECK(allocated <= 7 * report.device_bytes / 4);
+    }
 }
 
 TEST_CASE("opencl builder: nodes the reference budget makes leaves are counted and warned about") {
@@ -542,13 +552,21 @@ TEST_CASE("opencl builder: nodes the reference budget makes leaves are counted a
     const Scene big = make_scene(std::move(tris), "cube-spanning");
     BuildParams median;
     median.large_split_bins = 0;
-    BuildReport report;
-    const KdTree tree = build_opencl(test::opencl_test_device(), big, median, &report);
-    CHECK(report.budget_leaves > 0);
-    REQUIRE(report.warnings.size() == 1);
-    CHECK(report.warnings[0].find(std::to_string(report.budget_leaves) + " large node(s)") == 0);
-    const std::vector<std::string> errors = check_tree(tree, big);
-    CHECK_MESSAGE(errors.empty(), (errors.empty() ? std::string() : errors.front()));
+    // Both schedules: the levels' budget, and the depth-first subtrees' per depth (the whole
+    // scene is one deep root here).
+    for (LargeStage stage : {LargeStage::Chunked, LargeStage::DepthFirst}) {
+        CAPTURE(std::string(large_stage_name(stage)));
+        median.large_stage = stage;
+        BuildReport report;
+        const KdTree tree = build_opencl(test::opencl_test_device(), big, median, &report);
+        CHECK(report.budget_leaves > 0);
+        REQUIRE(report.warnings.size() == 1);
+        CHECK(report.warnings[0].find(std::to_string(report.budget_leaves) + " large node(s)") ==
+              0);
+        const std::vector<std::string> errors = check_tree(tree, big);
+        CHECK_MESSAGE(errors.empty(), (errors.empty() ? std::string() : errors.front()));
+    }
+    median.large_stage = LargeStage::Auto;
     // An ordinary scene never meets the budget.
     BuildReport ordinary;
     build_opencl(test::opencl_test_device(), test::random_triangles(3000, 52), median, &ordinary);

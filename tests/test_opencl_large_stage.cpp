@@ -1,11 +1,12 @@
 // test_opencl_large_stage.cpp — the OpenCL builder's large stage in the paper's element-parallel
 // shape (--large-stage level: a work-item per reference, a work-group per reduction chunk;
-// build_large_groups.cl) against its chunked shape (a work-item per chunk, build_large.cl): the
-// two must build the same tree node for node, at every quality, on scenes where the large stage
-// runs many levels, cuts empty space, clips straddlers, makes leaves of coincident faces and
-// splits at the median (no bins). A group kernel that ranked, binned, clipped or reduced one
-// reference differently would show as a node or a leaf index that differs; each tree also traces
-// as brute force does (check_same_tree).
+// build_large_groups.cl) and in its depth-first schedule (--large-stage depth-first: chunked
+// levels, then a work-item per subtree; build_large_depth_first.cl) against its chunked shape (a
+// work-item per chunk, build_large.cl): the three must build the same tree node for node, at every
+// quality, on scenes where the large stage runs many levels, cuts empty space, clips straddlers,
+// makes leaves of coincident faces and splits at the median (no bins). A group kernel that ranked,
+// binned, clipped or reduced one reference differently would show as a node or a leaf index that
+// differs; each tree also traces as brute force does (check_same_tree).
 #include <doctest/doctest.h>
 
 #include <filesystem>
@@ -29,21 +30,40 @@ BuildParams with_stage(BuildParams params, LargeStage stage) {
     return params;
 }
 
-/// Builds `scene` with both large-stage shapes and checks that the level tree is the chunked one,
-/// that each build says which shape ran, and that both took the same number of large levels.
+/// What check_same_as_chunked expects of the depth-first build beyond its tree.
+enum class DepthFirst {
+    Any,       // whatever the scene makes (a scene split into leaves at once makes no subtree)
+    Subtrees,  // subtrees handed to the depth-first schedule
+    OneRound,  // ... whose arenas all fit at the first run (real scenes)
+    Retried,   // ... some of which ran out of arena and were built again
+};
+
+/// Builds `scene` with every large-stage shape and checks that the level and depth-first trees
+/// are the chunked one, that each build says which shape ran, that both level-by-level shapes
+/// took the same number of large levels, and what `expect` says of the depth-first schedule.
+/// `limits` apply to the depth-first build.
 void check_same_as_chunked(const Scene& scene, const std::string& name,
-                           const BuildParams& params = {}) {
+                           const BuildParams& params = {}, DepthFirst expect = DepthFirst::Any,
+                           const detail::SmallStageLimits& limits = {}) {
     CAPTURE(name);
     ClDevice& device = test::opencl_test_device();
-    BuildReport chunked_report, level_report;
+    BuildReport chunked_report, level_report, depth_first_report;
     const KdTree chunked =
         build_opencl(device, scene, with_stage(params, LargeStage::Chunked), &chunked_report);
     const KdTree level =
         build_opencl(device, scene, with_stage(params, LargeStage::Level), &level_report);
+    const KdTree depth_first = detail::build_opencl_with_limits(
+        device, scene, with_stage(params, LargeStage::DepthFirst), limits, &depth_first_report);
     CHECK(chunked_report.large_stage == "chunked");
     CHECK(level_report.large_stage == "level");
+    CHECK(depth_first_report.large_stage == "depth-first");
     CHECK(level_report.large_node_levels == chunked_report.large_node_levels);
+    CHECK(depth_first_report.budget_leaves == chunked_report.budget_leaves);
+    if (expect != DepthFirst::Any) CHECK(depth_first_report.depth_first_subtrees > 0);
+    if (expect == DepthFirst::OneRound) CHECK(depth_first_report.depth_first_rounds == 1);
+    if (expect == DepthFirst::Retried) CHECK(depth_first_report.depth_first_rounds > 1);
     test::check_same_tree(level, chunked, scene, 31);
+    test::check_same_tree(depth_first, chunked, scene, 31);
 }
 
 /// Clusters of random triangles far apart on a diagonal: the top levels cut the empty space
@@ -64,7 +84,8 @@ Scene far_clusters() {
 
 }  // namespace
 
-TEST_CASE("opencl large stage: the element-parallel shape builds the chunked trees") {
+TEST_CASE(
+    "opencl large stage: the element-parallel and depth-first shapes build the chunked trees") {
     // Over 256 references per node at the top (several chunks per node, so ranks cross chunks),
     // at every quality of the ladder, and with the spatial median (large_split_bins 0: no bin
     // kernels at all).
@@ -78,24 +99,37 @@ TEST_CASE("opencl large stage: the element-parallel shape builds the chunked tre
         return s;
     }();
     for (const auto& [name, scene] : scenes) {
+        // Coincident faces make a leaf of the root: no subtree is left for the depth-first part.
+        const DepthFirst expect = name == "coincident" ? DepthFirst::Any : DepthFirst::Subtrees;
         for (BuildQuality q : {BuildQuality::Low, BuildQuality::Medium, BuildQuality::High})
             check_same_as_chunked(scene, name + "_" + build_quality_name(q),
-                                  with_build_quality({}, q));
+                                  with_build_quality({}, q), expect);
         BuildParams median;
         median.large_split_bins = 0;
-        check_same_as_chunked(scene, name + "_median", median);
+        check_same_as_chunked(scene, name + "_median", median, expect);
     }
 }
 
-TEST_CASE("opencl large stage: the hard scenes build the same tree in both shapes") {
+TEST_CASE("opencl large stage: depth-first subtrees whose arenas run out are built again") {
+    // Arenas a sixteenth of their size: most subtrees run out of records, small roots or their
+    // references on the first try and are built again with larger ones; the tree is the same.
+    detail::SmallStageLimits limits;
+    limits.depth_first_arena_shift = 4;
+    check_same_as_chunked(test::random_triangles(20000, 2801), "random_20000_small_arenas", {},
+                          DepthFirst::Retried, limits);
+    check_same_as_chunked(test::long_slivers(600, 7), "long_slivers_small_arenas", {},
+                          DepthFirst::Retried, limits);
+}
+
+TEST_CASE("opencl large stage: the hard scenes build the same tree in every shape") {
     for (const test::NamedScene& s : test::hard_scenes()) check_same_as_chunked(s.scene, s.name);
 }
 
-TEST_CASE("opencl large stage: the bunny builds the same tree in both shapes (../shared)") {
+TEST_CASE("opencl large stage: the bunny builds the same tree in every shape (../shared)") {
     const auto bunny = test::shared_dir() / "scenes" / "bunny" / "bunny.obj";
     if (!std::filesystem::exists(bunny)) {
         MESSAGE("skipped: " << bunny.string() << " is absent (../shared is not here)");
         return;
     }
-    check_same_as_chunked(load_obj(bunny), "bunny");
+    check_same_as_chunked(load_obj(bunny), "bunny", {}, DepthFirst::OneRound);
 }

@@ -133,12 +133,15 @@ TEST_CASE("opencl layout: the device's sizeof of every shared struct equals the 
         sizeof(KdSmallNode),      sizeof(KdLargeNode),     sizeof(KdLargeSplit),
         sizeof(KdLargeCuts),      sizeof(KdSmallRoot),     sizeof(KdLargeSplitArgs),
         sizeof(KdLargeLevelArgs), sizeof(KdSmallBatchArgs)};
-    host.push_back(sizeof(KdEmitter));  // layout.cl reports these six last
+    host.push_back(sizeof(KdEmitter));  // layout.cl reports these nine last
     host.push_back(sizeof(KdTexture));
     host.push_back(sizeof(KdSmallLevelNode));
     host.push_back(sizeof(KdSceneLayout));
     host.push_back(sizeof(KdRenderLaunch));
     host.push_back(sizeof(KdTraceCost));
+    host.push_back(sizeof(KdDepthFirstArgs));
+    host.push_back(sizeof(KdLargeRegion));
+    host.push_back(sizeof(KdDepthFirstTask));
     cl::Buffer out = device.allocate((1 + host.size()) * sizeof(cl_uint), "layout report");
     kernel.setArg(0, out);
     device.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(1));

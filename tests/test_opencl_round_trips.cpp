@@ -26,9 +26,10 @@ constexpr std::uint64_t kWaitsBesideLevels = 9;
 // count, the tree's nodes and leaf indices.
 constexpr std::uint64_t kTransfersBesideLevels = 12;
 
-BuildParams with_stage(SmallStage stage) {
+BuildParams with_stage(SmallStage stage, LargeStage large = LargeStage::Chunked) {
     BuildParams params;
     params.small_stage = stage;
+    params.large_stage = large;
     return params;
 }
 
@@ -97,6 +98,26 @@ TEST_CASE("opencl round trips: a build waits once per level and a stated number 
     REQUIRE(check_tree(per_root, scene).empty());
     CHECK(test::count_disagreements(per_root, scene, test::random_rays(scene, 2000, 5)) == 0);
     test::check_same_tree(per_level, per_root, scene, 31);
+
+    // The depth-first large stage: fewer levels, then its subtrees' sizes read once, and per run
+    // of its kernel (more than one when arenas ran out) the arenas' starts written and the
+    // subtrees' counts read; then their output bases written.
+    BuildReport depth_first_report;
+    const KdTree depth_first =
+        build_opencl(device, scene, with_stage(SmallStage::PerRoot, LargeStage::DepthFirst),
+                     &depth_first_report);
+    const BuildReport& d = depth_first_report;
+    CAPTURE(d.device_syncs);
+    CAPTURE(d.device_transfers);
+    CAPTURE(d.depth_first_rounds);
+    REQUIRE(d.depth_first_subtrees > 0);
+    CHECK(d.large_node_levels < root_report.large_node_levels);
+    const std::uint64_t rounds = std::uint64_t(d.depth_first_rounds);
+    CHECK(d.device_syncs <= std::uint64_t(d.large_node_levels) + kWaitsBesideLevels + 1 + rounds);
+    CHECK(d.device_transfers <=
+          std::uint64_t(d.large_node_levels) + kTransfersBesideLevels + 2 + 2 * rounds);
+    CHECK(d.kernel_launches < root_report.kernel_launches);
+    test::check_same_tree(depth_first, per_root, scene, 31);
 }
 
 TEST_CASE("opencl round trips: a build's scans take their scratch from its memory") {

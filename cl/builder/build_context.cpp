@@ -34,6 +34,8 @@ BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins) {
         }
         k.classify_groups = make_kernel(large, "kd_classify_chunk_groups");
         k.distribute_groups = make_kernel(large, "kd_distribute_chunk_groups");
+        k.build_depth_first = make_kernel(large, "kd_build_large_depth_first");
+        k.commit_depth_first = make_kernel(large, "kd_commit_depth_first");
         k.split_masks = make_kernel(small, "kd_compute_split_masks");
         k.build_subtrees = make_kernel(small, "kd_build_small_subtrees");
         k.second_pass_records = make_kernel(small, "kd_second_pass_records");
@@ -45,6 +47,8 @@ BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins) {
         k.write_small_level = make_kernel(small, "kd_write_small_level");
         k.size_subtrees = make_kernel(output, "kd_size_subtrees");
         k.place_subtrees = make_kernel(output, "kd_place_subtrees");
+        k.size_regions = make_kernel(output, "kd_size_regions");
+        k.place_regions = make_kernel(output, "kd_place_regions");
         k.write_nodes = make_kernel(output, "kd_write_nodes");
         k.write_small = make_kernel(output, "kd_write_small_subtrees");
         return k;

@@ -30,7 +30,9 @@ struct BuilderKernels {
     // The small stage's per-level shape (build_small_level.cl, in the small program).
     cl::Kernel start_small_level, split_small_level, size_small_level, place_small_level,
         count_small_level, write_small_level;
-    cl::Kernel size_subtrees, place_subtrees, write_nodes, write_small;
+    // The large stage's depth-first schedule (build_large_depth_first.cl).
+    cl::Kernel build_depth_first, commit_depth_first;
+    cl::Kernel size_subtrees, place_subtrees, size_regions, place_regions, write_nodes, write_small;
 };
 
 /// The kernels of `device` for large_split_bins (BuildParams::large_split_bins, compiled into the
@@ -55,7 +57,9 @@ struct BuildContext {
           kernels(builder_kernels(d, p.large_split_bins)),
           params(p),
           element_parallel_large(p.large_stage == LargeStage::Level ||
-                                 (p.large_stage == LargeStage::Auto && d.is_gpu())) {}
+                                 (p.large_stage == LargeStage::Auto && d.is_gpu())),
+          depth_first_large(p.large_stage == LargeStage::DepthFirst ||
+                            (p.large_stage == LargeStage::Auto && !d.is_gpu())) {}
     /// An upload may still read host memory when a stage throws: wait for it before that memory
     /// goes.
     ~BuildContext();
@@ -68,8 +72,15 @@ struct BuildContext {
     ClPrimitives primitives;
     BuilderKernels& kernels;
     BuildParams params;
-    /// The large stage's shape: a work-item per reference (LargeStage::Level) or per chunk.
-    bool element_parallel_large;
+    /// The large stage's shape: a work-item per reference (LargeStage::Level) or per chunk, and
+    /// whether subtrees go depth first once a level has enough nodes (LargeStage::DepthFirst).
+    bool element_parallel_large, depth_first_large;
+    /// The shape's name for the build's report.
+    LargeStage large_stage() const {
+        return depth_first_large        ? LargeStage::DepthFirst
+               : element_parallel_large ? LargeStage::Level
+                                        : LargeStage::Chunked;
+    }
 
     /// A counted array of `count` elements of T (sized by the shared struct, not by hand); a new
     /// buffer has room for `room` elements if that is more (DeviceMemory::allocate).
@@ -123,6 +134,9 @@ struct BuildOutput {
     // Leaves of the large stage keep their triangles here (KdBuildNode.leaf_first).
     DeviceArray leaf_store;
     cl_uint leaf_refs = 0;
+    // The depth-first schedule's subtrees (KdLargeRegion each): records outside the batches.
+    DeviceArray regions;
+    cl_uint region_count = 0;
 
     /// Room for `nodes` records in all; throws when they exceed the layout's offsets.
     void reserve_records(BuildContext& ctx, std::size_t nodes);

@@ -35,6 +35,10 @@ constexpr PerTriangle kPerTriangle[] = {
     {"small node records", 300},
     {"triangles", 36},
     {"triangle boxes", 24},
+    // The depth-first large stage's two largest arenas (large_depth_first.cpp): 4 and 3 boxes
+    // per deep-root reference, about 1.1 of those per triangle.
+    {"depth-first workspace boxes", 120},
+    {"depth-first small reference boxes", 90},
 };
 
 }  // namespace
@@ -81,9 +85,11 @@ Scene uv_sphere(int rings, int segments) {
 }
 
 void warm_up_launches(ClDevice& device, const BuildParams& params) {
-    // 2 * 8 * 16 triangles: more than a large node holds, so both stages and the output run, yet
-    // a build of under a millisecond once its kernels are loaded.
-    build_opencl(device, uv_sphere(8, 16), params);
+    // 2 * 16 * 40 triangles: more than a large node holds, and more than a deep root of the
+    // depth-first large stage at T = 64 (large_depth_first.cpp: at least 16 T), so that the
+    // large stage's levels, its depth-first subtrees, the small stage and the output all run, yet
+    // a build of a few milliseconds once its kernels are loaded.
+    build_opencl(device, uv_sphere(16, 40), params);
 }
 
 }  // namespace kdray::build_detail

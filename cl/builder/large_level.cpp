@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "cl/builder/large_depth_first.h"
 #include "cl/runtime/launch.h"
 
 namespace kdray::build_detail {
@@ -203,13 +204,36 @@ LargeLevel LargeLevel::root(BuildContext& ctx, TriangleBounds& triangles, const 
     return level;
 }
 
+void DeepRoots::reserve(BuildContext& ctx, std::size_t roots, std::size_t new_refs) {
+    ctx.reserve<KdLargeNode>(node, roots, count, "deep roots");
+    ctx.reserve<cl_uint>(ref_start, roots, count, "deep root reference starts");
+    ctx.reserve<cl_uint>(ref_count, roots, count, "deep root reference counts");
+    ctx.reserve<cl_uint>(ref_tri, new_refs, refs, "deep root triangle ids");
+    ctx.reserve<KdBuildBox>(ref_box, new_refs, refs, "deep root triangle boxes");
+}
+
+void DeepRoots::make_scene_root(BuildContext& ctx, TriangleBounds& triangles, const Aabb& bounds) {
+    node = ctx.allocate<KdLargeNode>(1, "deep roots");
+    ref_start = ctx.allocate<cl_uint>(1, "deep root reference starts");
+    ref_count = ctx.allocate<cl_uint>(1, "deep root reference counts");
+    ctx.write(node, std::vector<KdLargeNode>{{build_box(bounds), 0, 0}});
+    ctx.write(ref_start, std::vector<cl_uint>{0});
+    ctx.write(ref_count, std::vector<cl_uint>{triangles.count});
+    ref_tri = std::move(triangles.ref_tri);
+    ref_box = std::move(triangles.ref_box);
+    count = 1;
+    refs = triangles.count;
+}
+
 LargeLevel LargeLevel::next(BuildContext& ctx, const TriangleBounds& triangles, bool force_leaf,
-                            BuildOutput& output, SmallRoots& small, LargeScratch& scratch) {
+                            BuildOutput& output, SmallRoots& small, DeepRoots& deep,
+                            LargeScratch& scratch) {
     LevelSplit s;
     decide_splits(ctx, *this, force_leaf, s);
     const KdLargeLevelArgs args{
-        nodes,       refs,       chunks,           output.node_count,
-        small.count, small.refs, output.leaf_refs, cl_uint(ctx.params.large_node_threshold)};
+        nodes,          refs,       chunks,           output.node_count,
+        small.count,    small.refs, output.leaf_refs, cl_uint(ctx.params.large_node_threshold),
+        deep.deep_refs, deep.count, deep.refs,        0};
     const LevelTotals totals = classify_and_count(ctx, *this, triangles, args, s, scratch);
 
     /* Room for what this level creates, then write it. */
@@ -218,6 +242,11 @@ LargeLevel LargeLevel::next(BuildContext& ctx, const TriangleBounds& triangles, 
     output.reserve_records(ctx, std::size_t(output.node_count) + totals.new_nodes());
     small.reserve(ctx, checked_u32(std::uint64_t(small.count) + new_roots, "small roots"),
                   checked_u32(std::uint64_t(small.refs) + new_small_refs, "small references"));
+    const cl_uint new_deep_roots = totals.total(KDRAY_SLOT_DEEP);
+    const cl_uint new_deep_refs = totals.total(KDRAY_SLOT_DEEP_REFS);
+    if (new_deep_roots > 0)
+        deep.reserve(ctx, checked_u32(std::uint64_t(deep.count) + new_deep_roots, "deep roots"),
+                     checked_u32(std::uint64_t(deep.refs) + new_deep_refs, "deep references"));
     const cl_uint leaf_total = checked_u32(
         std::uint64_t(output.leaf_refs) + totals.total(KDRAY_SLOT_LEAF_REFS), "leaf references");
     ctx.reserve<cl_uint>(output.leaf_store, leaf_total, output.leaf_refs, "leaf references");
@@ -228,15 +257,17 @@ LargeLevel LargeLevel::next(BuildContext& ctx, const TriangleBounds& triangles, 
                    ref_count.buffer(), s.split.buffer(), s.cuts.buffer(), s.slot_rank.buffer(),
                    output.records.buffer(), next.node.buffer(), next.ref_start.buffer(),
                    next.ref_count.buffer(), next.chunk_start.buffer(), next.parent.buffer(),
-                   small.roots.buffer());
+                   small.roots.buffer(), deep.node.buffer(), deep.ref_start.buffer(),
+                   deep.ref_count.buffer());
     DeviceArray side_box = ctx.allocate<KdBuildBox>(2 * std::size_t(chunks), "chunk side boxes");
     enqueue_chunk_pass(ctx, ctx.kernels.distribute, ctx.kernels.distribute_groups, chunks, args,
                        ref_start.buffer(), ref_count.buffer(), chunk_start.buffer(),
                        ref_tri.buffer(), ref_box.buffer(), scratch.ref_sides.buffer(),
                        scratch.child_box.buffer(), s.split.buffer(), s.chunk_rank.buffer(),
                        s.slot_rank.buffer(), next.ref_tri.buffer(), next.ref_box.buffer(),
-                       small.ref_tri.buffer(), small.ref_box.buffer(), small.ref_root.buffer(),
-                       output.leaf_store.buffer(), side_box.buffer());
+                       deep.ref_tri.buffer(), deep.ref_box.buffer(), small.ref_tri.buffer(),
+                       small.ref_box.buffer(), small.ref_root.buffer(), output.leaf_store.buffer(),
+                       side_box.buffer());
     next.from_parent.chunks = chunks;
     next.from_parent.side_box = std::move(side_box);
     next.from_parent.chunk_start = std::move(chunk_start);
@@ -245,27 +276,45 @@ LargeLevel LargeLevel::next(BuildContext& ctx, const TriangleBounds& triangles, 
         output.add_batch(totals.total(KDRAY_SLOT_CHILD + g));
     small.count += new_roots;
     small.refs += new_small_refs;
+    deep.count += new_deep_roots;
+    deep.refs += new_deep_refs;
     output.leaf_refs = leaf_total;
     return next;
 }
 
 LargeStageResult run_large_stage(BuildContext& ctx, TriangleBounds& triangles, const Aabb& bounds,
-                                 BuildOutput& output, SmallRoots& small) {
+                                 BuildOutput& output, SmallRoots& small, unsigned arena_shift) {
     LargeStageResult result;
     if (triangles.count <= cl_uint(ctx.params.large_node_threshold)) {
         small.make_scene_root(ctx, triangles, bounds, output);
         return result;
     }
-    const std::size_t budget = kReferenceBudgetPerTriangle * std::size_t(triangles.count);
-    LargeScratch scratch;
-    for (LargeLevel level = LargeLevel::root(ctx, triangles, bounds); level.nodes > 0;) {
-        ++result.levels;
-        // Nodes at the depth limit become leaves in kd_split_large_nodes; over the budget, every
-        // node of the level does.
-        const bool over_budget = level.refs > budget;
-        if (over_budget) result.budget_leaves += level.nodes;
-        level = level.next(ctx, triangles, over_budget, output, small, scratch);
+    DeepRoots deep;
+    deep.deep_refs = ctx.depth_first_large ? deep_root_refs(ctx, triangles.count) : 0;
+    if (triangles.count <= deep.deep_refs) {
+        deep.make_scene_root(ctx, triangles, bounds);
+    } else {
+        // The kernels take the deep roots' arrays whether or not a level adds to them.
+        deep.reserve(ctx, 1, 1);
+        const std::size_t budget = kReferenceBudgetPerTriangle * std::size_t(triangles.count);
+        LargeScratch scratch;
+        for (LargeLevel level = LargeLevel::root(ctx, triangles, bounds); level.nodes > 0;) {
+            ++result.levels;
+            // Nodes at the depth limit become leaves in kd_split_large_nodes; over the budget,
+            // every node of the level does.
+            const bool over_budget = level.refs > budget;
+            if (over_budget) result.budget_leaves += level.nodes;
+            level = level.next(ctx, triangles, over_budget, output, small, deep, scratch);
+        }
     }
+    if (deep.count > 0) {
+        result.depth_first_subtrees = deep.count;
+        const DepthFirstResult built =
+            build_depth_first(ctx, triangles, deep, output, small, arena_shift);
+        result.budget_leaves += built.budget_leaves;
+        result.depth_first_rounds = built.rounds;
+    }
+
     return result;
 }
 

@@ -21,6 +21,25 @@ struct LargeScratch {
 /// What a level below the root keeps of the level before, to bound its nodes without reading its
 /// references: the parent level's chunk starts and, per chunk and side, the union of the boxes
 /// it sent there (kd_distribute_chunks' side_box), 2 * chunks boxes.
+/// The nodes the large stage's depth-first schedule builds (deep roots,
+/// build_large_depth_first.cl): the levels append every child of more than T and at most deep_refs
+/// references here instead of to the next level. Node i (a KdLargeNode) has references ref_start[i]
+/// .. + ref_count[i] of ref_tri and ref_box (triangle id, box clipped to the node), in the order
+/// the level had them.
+struct DeepRoots {
+    cl_uint count = 0, refs = 0;
+    /// The most references of a deep root; 0: the schedule is off (every large node stays in the
+    /// levels).
+    cl_uint deep_refs = 0;
+    DeviceArray node, ref_start, ref_count, ref_tri, ref_box;
+
+    /// Room for `roots` roots and `refs` references in all, keeping those there are.
+    void reserve(BuildContext& ctx, std::size_t roots, std::size_t refs);
+    /// The whole scene as the one deep root, node 0 (a scene of at most deep_refs triangles):
+    /// its references are the triangles' own boxes.
+    void make_scene_root(BuildContext& ctx, TriangleBounds& triangles, const Aabb& bounds);
+};
+
 struct ParentBoxes {
     cl_uint chunks = 0;
     DeviceArray chunk_start, side_box;
@@ -46,11 +65,12 @@ struct LargeLevel {
 
     /// Splits every node of this level: writes their node records (with their chains of
     /// empty-space cuts and their empty leaves) to `output`, appends the children of at most T
-    /// references to `small` and the leaves' references to the leaf store, and returns the
-    /// next level: the children that stay large. `force_leaf`: every node becomes a leaf. The
-    /// next level takes this one's chunk starts (ParentBoxes).
+    /// references to `small`, those of at most deep.deep_refs to `deep` and the leaves'
+    /// references to the leaf store, and returns the next level: the children that stay large.
+    /// `force_leaf`: every node becomes a leaf. The next level takes this one's chunk starts
+    /// (ParentBoxes).
     LargeLevel next(BuildContext& ctx, const TriangleBounds& triangles, bool force_leaf,
-                    BuildOutput& output, SmallRoots& small, LargeScratch& scratch);
+                    BuildOutput& output, SmallRoots& small, DeepRoots& deep, LargeScratch& scratch);
 };
 
 /// A large-stage level holding more references than this many per triangle splits no further: its
@@ -63,11 +83,15 @@ constexpr std::size_t kReferenceBudgetPerTriangle = 4;
 struct LargeStageResult {
     int levels = 0;
     std::size_t budget_leaves = 0;
+    std::size_t depth_first_subtrees = 0;  // deep roots (large_depth_first.h)
+    int depth_first_rounds = 0;            // runs of the depth-first kernel
 };
 
-/// Large-node stage (§4.1): levels until no large node is left; a scene of at most T triangles
-/// is one small root from the start.
+/// Large-node stage (§4.1): levels until no large node is left, then with the depth-first
+/// schedule the deep roots the levels made (large_depth_first.h); a scene of at most T triangles
+/// is one small root from the start, one of at most deep_refs one deep root.
+/// `arena_shift`: the depth-first arenas start that many halvings small (tests).
 LargeStageResult run_large_stage(BuildContext& ctx, TriangleBounds& triangles, const Aabb& bounds,
-                                 BuildOutput& output, SmallRoots& small);
+                                 BuildOutput& output, SmallRoots& small, unsigned arena_shift = 0);
 
 }  // namespace kdray::build_detail

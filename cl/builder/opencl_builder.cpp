@@ -115,9 +115,7 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
 
     Build b(device, tree.params);
     BuildContext& ctx = b.ctx;
-    if (report)
-        report->large_stage =
-            large_stage_name(ctx.element_parallel_large ? LargeStage::Level : LargeStage::Chunked);
+    if (report) report->large_stage = large_stage_name(ctx.large_stage());
     StageClock clock(device, report);
     b.output.reserve_records(ctx, 1);
     b.output.add_batch(1);  // the root, id 0
@@ -128,8 +126,8 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
     clock.lap("upload");
     compute_triangle_boxes(ctx, b.triangles);
     clock.lap("aabbs");
-    const LargeStageResult large =
-        run_large_stage(ctx, b.triangles, tree.bounds, b.output, b.small_roots);
+    const LargeStageResult large = run_large_stage(ctx, b.triangles, tree.bounds, b.output,
+                                                   b.small_roots, limits.depth_first_arena_shift);
     clock.lap("large_nodes");
     b.small = run_small_stage(
         ctx, b.small_roots, b.triangles, std::max(1u, limits.subtree_budget_scale),
@@ -158,11 +156,14 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
                 .count();
         report->large_node_levels = large.levels;
+        report->depth_first_subtrees = large.depth_first_subtrees;
+        report->depth_first_rounds = large.depth_first_rounds;
         report->budget_leaves = large.budget_leaves;
         if (large.budget_leaves > 0)
             report->warnings.push_back(
                 std::to_string(large.budget_leaves) +
-                " large node(s) became leaves unsplit: their level would have held more than " +
+                " large node(s) became leaves unsplit: their level (or their depth-first "
+                "subtree) would have held more than " +
                 std::to_string(kReferenceBudgetPerTriangle) +
                 " references per triangle (splits cut most triangles), so those leaves hold many "
                 "triangles and trace slowly");

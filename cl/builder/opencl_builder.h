@@ -57,6 +57,10 @@ struct SmallStageLimits {
     /// the device's largest allocation. Tests pass a few kilobytes so that a small scene is
     /// built in many batches.
     std::size_t batch_bytes = 0;
+    /// The large stage's depth-first arenas start this many halvings smaller than their usual
+    /// size (large_depth_first.cpp). Tests pass a few so that the arenas run out and the subtrees
+    /// are built again with larger ones.
+    unsigned depth_first_arena_shift = 0;
 };
 
 KdTree build_opencl_with_limits(ClDevice& device, const Scene& scene, const BuildParams& params,

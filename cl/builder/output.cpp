@@ -17,11 +17,15 @@ PreorderTree write_preorder(BuildContext& ctx, const BuildOutput& output, const 
     check_offset_limit(count, "nodes");
     tree.node_count = cl_uint(count);
 
-    /* Subtree sizes bottom up, one launch per batch of ids (children lie in later batches). */
+    /* Subtree sizes bottom up: the depth-first subtrees', then one launch per batch of ids
+     * (children lie in later batches). */
     DeviceArray subtree_nodes = ctx.allocate<cl_uint>(records, "subtree node counts");
     DeviceArray subtree_refs = ctx.allocate<cl_uint>(records, "subtree reference counts");
     DeviceArray position = ctx.allocate<cl_uint>(records, "preorder positions");
     DeviceArray leaf_position = ctx.allocate<cl_uint>(records, "leaf index positions");
+    enqueue_per_item(ctx.device, k.size_regions, output.region_count, output.region_count,
+                     output.regions.buffer(), output.records.buffer(), subtrees.node_count.buffer(),
+                     subtrees.leaf_refs.buffer(), subtree_nodes.buffer(), subtree_refs.buffer());
     for (auto it = output.batches.rbegin(); it != output.batches.rend(); ++it)
         enqueue_kernel(ctx.device, k.size_subtrees, it->second, it->first, it->second,
                        output.records.buffer(), subtrees.node_count.buffer(),
@@ -34,6 +38,9 @@ PreorderTree write_preorder(BuildContext& ctx, const BuildOutput& output, const 
         enqueue_kernel(ctx.device, k.place_subtrees, n, begin, n, output.records.buffer(),
                        subtree_nodes.buffer(), subtree_refs.buffer(), position.buffer(),
                        leaf_position.buffer());
+    enqueue_per_item(ctx.device, k.place_regions, output.region_count, output.region_count,
+                     output.regions.buffer(), output.records.buffer(), subtree_nodes.buffer(),
+                     subtree_refs.buffer(), position.buffer(), leaf_position.buffer());
     tree.leaf_index_count = ctx.read_uint(subtree_refs, 0);
     check_offset_limit(tree.leaf_index_count, "leaf references");
 

@@ -50,6 +50,24 @@ void enqueue_kernel(ClDevice& device, cl::Kernel& kernel, std::size_t count, con
     }
 }
 
+/// Enqueues `kernel` over `count` work-items in work-groups of one: for kernels whose every item
+/// walks a large piece of work of its own (a subtree), few of them, so that a CPU device spreads
+/// the items over its cores (with groups of KDRAY_LAUNCH_GROUP, a group's items run one after
+/// another on one core). One local size, so one compiled variant. Nothing when count is 0.
+template <class... Args>
+void enqueue_per_item(ClDevice& device, cl::Kernel& kernel, std::size_t count,
+                      const Args&... args) {
+    if (count == 0) return;
+    try {
+        set_kernel_args(kernel, args...);
+        device.launch(kernel, cl::NDRange(count), cl::NDRange(1));
+    } catch (const cl::Error& e) {
+        throw_cl_error("running kernel " + kernel.getInfo<CL_KERNEL_FUNCTION_NAME>() + " over " +
+                           std::to_string(count) + " items",
+                       e.what(), e.err());
+    }
+}
+
 /// Enqueues `kernel` over `groups` work-groups of one KDRAY_REDUCE_CHUNK-sized chunk each: the
 /// local size is the largest power of two up to KDRAY_REDUCE_CHUNK that the kernel and the
 /// device allow (choose_group_1d), and the kernel walks its chunk in rounds of that many

@@ -49,8 +49,10 @@
 #define KDRAY_SLOT_SMALL 3u        /* the child becomes a small root (1/0) */
 #define KDRAY_SLOT_SMALL_REFS 4u   /* ... its reference count */
 #define KDRAY_SLOT_LEAF_REFS 5u    /* references of a node that becomes a leaf (in its slot 2i) */
+#define KDRAY_SLOT_DEEP 6u         /* the child goes to the depth-first schedule (1/0) */
+#define KDRAY_SLOT_DEEP_REFS 7u    /* ... its reference count */
 #define KDRAY_SLOT_CHILD                                                    \
-    6u /* new nodes of generation 0 (then 1, ..., KDRAY_MAX_CUTS): node ids \
+    8u /* new nodes of generation 0 (then 1, ..., KDRAY_MAX_CUTS): node ids \
         */
 #define KDRAY_SLOT_KINDS (KDRAY_SLOT_CHILD + KDRAY_MAX_CUTS + 1u)
 
@@ -212,10 +214,12 @@ typedef struct KdLargeSplitArgs {
     kd_u32 bins_by_node;
 } KdLargeSplitArgs;
 
-/* KdLargeLevelArgs — 32 bytes. What the large stage's per-level kernels after the split know of
+/* KdLargeLevelArgs — 48 bytes. What the large stage's per-level kernels after the split know of
  * their level: its nodes, references and reduction chunks; where this level's new node ids,
- * small roots, small-root references and leaf references start; and the large-node threshold T
- * (more references stay large). */
+ * small roots, small-root references and leaf references start; the large-node threshold T (more
+ * references stay large); deep_refs, the most references of a large child that goes to the
+ * depth-first schedule instead of the next level (0: none does), and where this level's such
+ * children (deep roots) and their references start; pad 0. */
 typedef struct KdLargeLevelArgs {
     kd_u32 nodes;
     kd_u32 refs;
@@ -225,7 +229,73 @@ typedef struct KdLargeLevelArgs {
     kd_u32 small_ref_base;
     kd_u32 leaf_ref_base;
     kd_u32 large_threshold;
+    kd_u32 deep_refs;
+    kd_u32 deep_root_base;
+    kd_u32 deep_ref_base;
+    kd_u32 pad;
 } KdLargeLevelArgs;
+
+/* The depth-first large stage (build_large_depth_first.cl): one work-item builds the whole large
+ * subtree of one deep root, in arenas of its own that a second kernel copies into the build's
+ * stores.
+ * Arena kinds, each an array of nodes + 1 starts per kind (item w owns [start[w], start[w + 1])),
+ * and the same numbers index the counts an item reports: */
+#define KDRAY_DF_WORK 0u       /* workspace references (triangle id and clipped box) */
+#define KDRAY_DF_RECORDS 1u    /* KdBuildNode records, the subtree's root first */
+#define KDRAY_DF_ROOTS 2u      /* KdSmallRoot records of the small roots it makes */
+#define KDRAY_DF_SMALL_REFS 3u /* their references */
+#define KDRAY_DF_LEAF_REFS 4u  /* references of the large nodes that become leaves */
+#define KDRAY_DF_KINDS 5u
+/* In an item's counts, the WORK entry reports instead the arenas that were too small (bit k: kind
+ * k), and this extra one the nodes that became leaves because the workspace was full. */
+#define KDRAY_DF_BUDGET_LEAVES 5u
+#define KDRAY_DF_COUNTS 6u
+
+/* KdDepthFirstArgs — 32 bytes. kd_build_large_depth_first's scalars: its work-items (the deep
+ * roots, one each), the depth limit, the large-node threshold T, empty_ratio C_e, the SAH
+ * costs C_t, C_i and the empty-space bonus; ref_budget, the most references a subtree's nodes of
+ * one depth may hold per reference of its root (the levels' budget per triangle). */
+typedef struct KdDepthFirstArgs {
+    kd_u32 nodes;
+    kd_u32 max_depth;
+    kd_u32 large_threshold;
+    kd_f32 empty_ratio;
+    kd_f32 cost_traversal;
+    kd_f32 cost_intersection;
+    kd_f32 empty_bonus;
+    kd_u32 ref_budget;
+} KdDepthFirstArgs;
+
+/* KdDepthFirstTask — 64 bytes. A node waiting on a depth-first work-item's stack (in global
+ * memory, KDRAY_DF_STACK entries per item: kept out of the work-item's private memory, which
+ * GPUs have little of, at the cost of one load per node).
+ *   box          the node's box.
+ *   tight        its references' bounds.
+ *   begin, count its references' range in the item's workspace.
+ *   depth        its depth in the tree.
+ *   record       its record, an index in the item's record arena. */
+typedef struct KdDepthFirstTask {
+    KdBuildBox box;
+    KdBuildBox tight;
+    kd_u32 begin;
+    kd_u32 count;
+    kd_u32 depth;
+    kd_u32 record;
+} KdDepthFirstTask;
+
+/* Stack entries per depth-first work-item: a node's children have larger depths than it, and at
+ * most one of them waits while the other is split, so at most one node per depth waits. */
+#define KDRAY_DF_STACK (KDRAY_MAX_DEPTH + 2)
+
+/* KdLargeRegion — 16 bytes. The records one depth-first work-item made, for the output stage:
+ * root, the deep root's record id (made by a level, in one of its batches); first and count, the
+ * ids of the rest, in the order they were made (a parent before its children); pad 0. */
+typedef struct KdLargeRegion {
+    kd_u32 root;
+    kd_u32 first;
+    kd_u32 count;
+    kd_u32 pad;
+} KdLargeRegion;
 
 /* KdSmallBatchArgs — 48 bytes. A batch of small roots (root_begin.., `roots` of them, whose
  * references start at ref_begin) and how the small stage builds and lays out their subtrees:
@@ -261,8 +331,11 @@ static_assert(sizeof(KdLargeCuts) == 56, "KdLargeCuts is 56 bytes on every devic
 static_assert(sizeof(KdSmallRoot) == 40, "KdSmallRoot is 40 bytes on every device");
 static_assert(sizeof(KdSmallLevelNode) == 96, "KdSmallLevelNode is 96 bytes on every device");
 static_assert(sizeof(KdLargeSplitArgs) == 32, "KdLargeSplitArgs is 32 bytes on every device");
-static_assert(sizeof(KdLargeLevelArgs) == 32, "KdLargeLevelArgs is 32 bytes on every device");
+static_assert(sizeof(KdLargeLevelArgs) == 48, "KdLargeLevelArgs is 48 bytes on every device");
 static_assert(sizeof(KdSmallBatchArgs) == 48, "KdSmallBatchArgs is 48 bytes on every device");
+static_assert(sizeof(KdDepthFirstArgs) == 32, "KdDepthFirstArgs is 32 bytes on every device");
+static_assert(sizeof(KdLargeRegion) == 16, "KdLargeRegion is 16 bytes on every device");
+static_assert(sizeof(KdDepthFirstTask) == 64, "KdDepthFirstTask is 64 bytes on every device");
 #endif
 
 #endif /* KDRAY_KD_BUILD_SHARED_H */

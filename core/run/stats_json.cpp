@@ -42,6 +42,10 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
         if (!built.report.small_stage.empty()) j["small_stage"] = built.report.small_stage;
         if (!built.report.large_stage.empty()) j["large_stage"] = built.report.large_stage;
         j["large_node_levels"] = built.report.large_node_levels;
+        if (built.report.large_stage == "depth-first") {
+            j["depth_first_subtrees"] = built.report.depth_first_subtrees;
+            j["depth_first_rounds"] = built.report.depth_first_rounds;
+        }
         j["small_node_levels"] = built.report.small_node_levels;
         j["budget_leaves"] = built.report.budget_leaves;
         j["device_bytes"] = built.report.device_bytes;

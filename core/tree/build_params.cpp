@@ -52,12 +52,15 @@ const char* large_stage_name(LargeStage stage) {
             return "chunked";
         case LargeStage::Level:
             return "level";
+        case LargeStage::DepthFirst:
+            return "depth-first";
     }
     return "?";
 }
 
 std::optional<LargeStage> parse_large_stage(std::string_view name) {
-    for (LargeStage stage : {LargeStage::Auto, LargeStage::Chunked, LargeStage::Level})
+    for (LargeStage stage :
+         {LargeStage::Auto, LargeStage::Chunked, LargeStage::Level, LargeStage::DepthFirst})
         if (name == large_stage_name(stage)) return stage;
     return std::nullopt;
 }
@@ -95,10 +98,9 @@ void validate_build_params(const BuildParams& p) {
         p.small_stage != SmallStage::PerLevel)
         reject("the small-node stage", "--small-stage", int(p.small_stage),
                "auto, per-root or per-level");
-    if (p.large_stage != LargeStage::Auto && p.large_stage != LargeStage::Chunked &&
-        p.large_stage != LargeStage::Level)
+    if (!parse_large_stage(large_stage_name(p.large_stage)))
         reject("the large-node stage", "--large-stage", int(p.large_stage),
-               "auto, chunked or level");
+               "auto, chunked, level or depth-first");
 }
 
 }  // namespace kdray

@@ -39,15 +39,17 @@ const char* small_stage_name(SmallStage stage);
 /// The stage named `name` (small_stage_name's names), or nothing.
 std::optional<SmallStage> parse_small_stage(std::string_view name);
 
-/// The shape of the OpenCL builder's large-node stage (`--large-stage`); both build the same tree.
-/// Both go level by level (Zhou et al. 2008, section 4.1). Chunked: a work-item walks a reduction
-/// chunk of KDRAY_REDUCE_CHUNK references in order (CPU devices, which run a group's items one
-/// after another). Level: the paper's element-parallel shape, a work-item per reference and a
-/// work-group per chunk reducing its boxes, bins and counts in local memory (GPUs). Auto: Level on
-/// a GPU device, Chunked otherwise.
-enum class LargeStage { Auto, Chunked, Level };
+/// The shape of the OpenCL builder's large-node stage (`--large-stage`); all build the same tree.
+/// Chunked and Level go level by level (Zhou et al. 2008, section 4.1). Chunked: a work-item
+/// walks a reduction chunk of KDRAY_REDUCE_CHUNK references in order (CPU devices, which run a
+/// group's items one after another). Level: the paper's element-parallel shape, a work-item per
+/// reference and a work-group per chunk reducing its boxes, bins and counts in local memory
+/// (GPUs). DepthFirst: chunked levels until a level has a few nodes per compute unit, then a
+/// work-item builds each of its nodes' large subtrees depth first, in cache (CPUs). Auto: Level
+/// on a GPU device, DepthFirst otherwise.
+enum class LargeStage { Auto, Chunked, Level, DepthFirst };
 
-/// "auto", "chunked" or "level".
+/// "auto", "chunked", "level" or "depth-first".
 const char* large_stage_name(LargeStage stage);
 
 /// The stage named `name` (large_stage_name's names), or nothing.
@@ -89,7 +91,7 @@ struct BuildParams {
 /// large_node_threshold in [1, KDRAY_SMALL_ROOT_MAX_REFS] (the small stage's 64-bit masks),
 /// empty_space_ratio in [0, 1], large_split_bins in [0, kMaxLargeSplitBins], small_reclip_refs
 /// in [0, KDRAY_RECLIP_REFS], small_leaf_refs in [0, KDRAY_SMALL_ROOT_MAX_REFS], max_depth in
-/// [0, KDRAY_MAX_DEPTH], small_stage and large_stage each one of its three values. NaN fails every
+/// [0, KDRAY_MAX_DEPTH], small_stage and large_stage each one of their values. NaN fails every
 /// test. The one check of every builder, the command line and tree files read back.
 void validate_build_params(const BuildParams& params);
 
@@ -113,8 +115,13 @@ struct BuildReport {
     /// The small stage's shape the OpenCL builder ran, "per-root" or "per-level" (never "auto";
     /// empty for other builders).
     std::string small_stage;
-    /// The large stage's shape it ran, "chunked" or "level" (likewise).
+    /// The large stage's shape it ran, "chunked", "level" or "depth-first" (likewise), and with
+    /// depth-first the subtrees it built so (its deep roots).
     std::string large_stage;
+    std::size_t depth_first_subtrees = 0;
+    /// Runs of the depth-first kernel: 1, more when a subtree's arenas ran out and it was built
+    /// again with larger ones (0 without depth-first subtrees).
+    int depth_first_rounds = 0;
     std::vector<std::string> warnings;  // one line each, for the user and stats.json
 };
 

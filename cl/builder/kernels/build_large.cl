@@ -83,6 +83,53 @@ __kernel void kd_bin_large_chunks(__global const float* ref_box, __global const 
 #endif
 
 
+/* The chain of empty-space cuts of a node of box *box at `depth` whose references' bounds are
+ * `tight` (within the box): while the widest empty slab on one side exceeds `ratio` of the box's
+ * extent on its axis, cut it off (at most KDRAY_MAX_CUTS cuts, and none past the depth limit).
+ * *box becomes the box of the chain's last node. Both large stages' rule (kd_split_large_nodes,
+ * kd_build_large_depth_first). */
+KDRAY_INLINE void kd_empty_space_cuts(KdBox* box, KdBox tight, uint depth, uint max_depth,
+                                      float ratio, KdLargeCuts* chain) {
+    for (uint g = 0; g < KDRAY_MAX_CUTS; ++g) chain->code[g] = 0, chain->pos[g] = 0.0f;
+    chain->pad = 0;
+    uint cuts = 0;
+    while (cuts < KDRAY_MAX_CUTS && depth + cuts < max_depth) {
+        const float3 extent = box->hi - box->lo;
+        float best = ratio;
+        uint axis = KDRAY_LEAF_AXIS, keep_above = 0;
+        float pos = 0.0f;
+        for (uint a = 0; a < 3; ++a) {
+            const float e = kd_axis_of(extent, a);
+            if (!(e > 0.0f)) continue;
+            const float gap_lo = (kd_axis_of(tight.lo, a) - kd_axis_of(box->lo, a)) / e;
+            const float gap_hi = (kd_axis_of(box->hi, a) - kd_axis_of(tight.hi, a)) / e;
+            if (gap_lo > best) best = gap_lo, axis = a, pos = kd_axis_of(tight.lo, a), keep_above = 1;
+            if (gap_hi > best) best = gap_hi, axis = a, pos = kd_axis_of(tight.hi, a), keep_above = 0;
+        }
+        if (axis == KDRAY_LEAF_AXIS) break;
+        chain->code[cuts] = axis * 2 + keep_above;
+        chain->pos[cuts] = pos;
+        *box = kd_child_box(*box, axis, pos, keep_above);
+        ++cuts;
+    }
+    chain->count = cuts;
+}
+
+/* The spatial median of the box's longest axis: the plane without bins, and the one the binned
+ * SAH replaces when it finds one. */
+KDRAY_INLINE void kd_median_plane(KdBox box, uint* axis, float* pos) {
+    const float3 extent = box.hi - box.lo;
+    *axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+    *pos = 0.5f * (kd_axis_of(box.lo, *axis) + kd_axis_of(box.hi, *axis));
+}
+
+/* The split axis, or KDRAY_LEAF_AXIS when the plane does not lie strictly inside the box (a box
+ * flat in every axis cannot be split) or the children would pass the depth limit. */
+KDRAY_INLINE uint kd_plane_or_leaf(KdBox box, uint axis, float pos, uint depth, uint max_depth) {
+    const float lo = kd_axis_of(box.lo, axis), hi = kd_axis_of(box.hi, axis);
+    return pos > lo && pos < hi && depth < max_depth ? axis : KDRAY_LEAF_AXIS;
+}
+
 /* Split large nodes (§4.1): cut off empty space when the empty slab on one side of the node's
  * tight box exceeds C_e of the node's extent (the largest such slab wins), otherwise split the
  * node's box at the spatial median of its longest axis, or at its cheapest binned SAH plane
@@ -115,50 +162,23 @@ __kernel void kd_split_large_nodes(KdLargeSplitArgs a, __global KdLargeNode* nod
     KdBox tight = kd_load_box(tight_box, i);
     tight.lo = fmax(tight.lo, box.lo);
     tight.hi = fmin(tight.hi, box.hi);
-    const uint depth = node[i].depth, max_depth = a.max_depth;
-    uint cuts = 0;
-
-    /* Empty space cutting: the widest empty slab relative to the current box's extent. */
-    while (cuts < KDRAY_MAX_CUTS && depth + cuts < max_depth) {
-        const float3 extent = box.hi - box.lo;
-        float best = a.empty_ratio;
-        uint axis = KDRAY_LEAF_AXIS, keep_above = 0;
-        float pos = 0.0f;
-        for (uint a = 0; a < 3; ++a) {
-            const float e = kd_axis_of(extent, a);
-            if (!(e > 0.0f)) continue;
-            const float gap_lo = (kd_axis_of(tight.lo, a) - kd_axis_of(box.lo, a)) / e;
-            const float gap_hi = (kd_axis_of(box.hi, a) - kd_axis_of(tight.hi, a)) / e;
-            if (gap_lo > best) best = gap_lo, axis = a, pos = kd_axis_of(tight.lo, a), keep_above = 1;
-            if (gap_hi > best) best = gap_hi, axis = a, pos = kd_axis_of(tight.hi, a), keep_above = 0;
-        }
-        if (axis == KDRAY_LEAF_AXIS) break;
-        chain[i].code[cuts] = axis * 2 + keep_above;
-        chain[i].pos[cuts] = pos;
-        box = kd_child_box(box, axis, pos, keep_above);
-        ++cuts;
-    }
-    chain[i].count = cuts;
+    const uint depth = node[i].depth;
+    KdLargeCuts cuts;
+    kd_empty_space_cuts(&box, tight, depth, a.max_depth, a.empty_ratio, &cuts);
+    chain[i] = cuts;
     node[i].box = kd_build_box_of(box);
 
-    /* Spatial median of the longest axis, or the binned SAH plane. A box flat in every axis
-     * cannot be split. */
-    const float3 extent = box.hi - box.lo;
-    uint axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
-    float lo = kd_axis_of(box.lo, axis), hi = kd_axis_of(box.hi, axis);
-    float pos = 0.5f * (lo + hi);
+    uint axis;
+    float pos;
+    kd_median_plane(box, &axis, &pos);
 #if KDRAY_LARGE_BINS > 0
     const uint bins_first = a.bins_by_node ? i : node_chunk[i];
     const uint bins_end = a.bins_by_node ? i + 1 : node_chunk[i + 1];
-    if (kd_best_large_split(box, tight, chunk_bins, bins_first, bins_end, node_count[i],
-                            a.cost_traversal, a.cost_intersection, a.empty_bonus, &axis, &pos)) {
-        lo = kd_axis_of(box.lo, axis);
-        hi = kd_axis_of(box.hi, axis);
-    }
+    kd_best_large_split(box, tight, chunk_bins, bins_first, bins_end, node_count[i],
+                        a.cost_traversal, a.cost_intersection, a.empty_bonus, &axis, &pos);
 #endif
-    if (!(pos > lo && pos < hi) || depth + cuts >= max_depth) axis = KDRAY_LEAF_AXIS;
     KdLargeSplit s;
-    s.axis = axis;
+    s.axis = kd_plane_or_leaf(box, axis, pos, depth + cuts.count, a.max_depth);
     s.pos = pos;
     split[i] = s;
 }
@@ -167,6 +187,32 @@ __kernel void kd_split_large_nodes(KdLargeSplitArgs a, __global KdLargeNode* nod
  * KDRAY_CLIPPED when its box straddles the plane: its box in each child it enters is then in
  * child_box (at [side * refs + r]), not ref_box. */
 #define KDRAY_CLIPPED 4u
+
+/* A reference of box b (triangle tri) straddling the plane `split` of a node of box `node`: its
+ * box in each child (*below, *above), the bounds of the triangle's part there (at worst b cut at
+ * the plane); returns the children the triangle enters (KDRAY_BELOW | KDRAY_ABOVE), none when
+ * clipping finds it in neither. Both large stages' clipping. The sides are written out, not
+ * looped over an array of two boxes: the array stayed on the stack, and its 32-byte stores read
+ * back in 16-byte halves stalled the depth-first partition's loop. */
+KDRAY_HOT_INLINE uint kd_clip_side(KdBox b, __global const float* tri, const uint axis,
+                                   float split, KdBox node, uint side, KdBox* out) {
+    KdBox c = b, clipped;
+    if (side == 0) c.hi = kd_with_axis(c.hi, axis, split);
+    else c.lo = kd_with_axis(c.lo, axis, split);
+    const int entered = kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, side), &clipped);
+    if (entered) {
+        c.lo = fmin(fmax(c.lo, clipped.lo), c.hi);
+        c.hi = fmax(fmin(c.hi, clipped.hi), c.lo);
+    }
+    *out = c;
+    return entered ? (side == 0 ? KDRAY_BELOW : KDRAY_ABOVE) : 0u;
+}
+
+KDRAY_HOT_INLINE uint kd_clip_straddler(KdBox b, __global const float* tri, const uint axis,
+                                        float split, KdBox node, KdBox* below, KdBox* above) {
+    return kd_clip_side(b, tri, axis, split, node, 0, below) |
+           kd_clip_side(b, tri, axis, split, node, 1, above);
+}
 
 /* Reference r of a node (box `node`) against its split plane: its sides, KDRAY_BELOW |
  * KDRAY_ABOVE, with KDRAY_CLIPPED and its box in each child it enters written to child_box (at
@@ -184,20 +230,12 @@ KDRAY_HOT_INLINE uint kd_classify_reference(uint r, uint refs, const uint axis, 
     __global const float* box = ref_box + (size_t)r * KDRAY_BOX_FLOATS;
     uint sides = kd_classify(box[axis], box[3 + axis], split, planar);
     if (sides == (KDRAY_BELOW | KDRAY_ABOVE)) {
-        const KdBox b = kd_load_box(ref_box, r);
+        KdBox below, above;
         __global const float* tri = triangles + (size_t)ref_tri[r] * KDRAY_FLOATS_PER_TRIANGLE;
-        uint entered = 0;
-        for (uint side = 0; side < 2; ++side) {
-            KdBox cut = b, clipped;
-            if (side == 0) cut.hi = kd_with_axis(cut.hi, axis, split);
-            else cut.lo = kd_with_axis(cut.lo, axis, split);
-            if (kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, side), &clipped)) {
-                entered |= side == 0 ? KDRAY_BELOW : KDRAY_ABOVE;
-                cut.lo = fmin(fmax(cut.lo, clipped.lo), cut.hi);
-                cut.hi = fmax(fmin(cut.hi, clipped.hi), cut.lo);
-            }
-            kd_store_box(child_box, (size_t)side * refs + r, cut);
-        }
+        const uint entered =
+            kd_clip_straddler(kd_load_box(ref_box, r), tri, axis, split, node, &below, &above);
+        kd_store_box(child_box, r, below);
+        kd_store_box(child_box, (size_t)refs + r, above);
         sides = (entered ? entered : sides) | KDRAY_CLIPPED;
     }
     return sides;
@@ -276,8 +314,9 @@ KDRAY_INLINE uint kd_slot_rank(__global const uint* slot_rank, uint slots, uint 
     return slot_rank[k * slots + s] - slot_rank[k * slots];
 }
 
-/* Count each node's children and give every child its kind: more than T references stay large,
- * 1..T become small roots (§4.2), none an empty leaf. A split that separates nothing (both
+/* Count each node's children and give every child its kind: more than T references stay large
+ * (or, at most deep_refs of them, go to the depth-first schedule: a deep root), 1..T become small
+ * roots (§4.2), none an empty leaf. A split that separates nothing (both
  * children keep all references, e.g. a stack of coincident triangles) would recurse forever, so
  * the node becomes a leaf instead. The node's chunk counts (classify's) become, in place, each
  * chunk's rank within the node per side: what distribute adds its own running count to. A scan
@@ -324,7 +363,10 @@ __kernel void kd_count_large_children(KdLargeLevelArgs a, __global const uint* n
     slot_values[(KDRAY_SLOT_CHILD + cuts) * slots + 2 * i] = 2;
     for (uint side = 0; side < 2; ++side) {
         const uint s = 2 * i + side;
-        if (n[side] > a.large_threshold) {
+        if (n[side] > a.large_threshold && n[side] <= a.deep_refs) {
+            slot_values[KDRAY_SLOT_DEEP * slots + s] = 1;
+            slot_values[KDRAY_SLOT_DEEP_REFS * slots + s] = n[side];
+        } else if (n[side] > a.large_threshold) {
             slot_values[KDRAY_SLOT_LARGE * slots + s] = 1;
             slot_values[KDRAY_SLOT_LARGE_REFS * slots + s] = n[side];
             slot_values[KDRAY_SLOT_LARGE_CHUNKS * slots + s] =
@@ -336,9 +378,10 @@ __kernel void kd_count_large_children(KdLargeLevelArgs a, __global const uint* n
     }
 }
 
-/* Write this level's node records and create its children: the next level's large nodes, new
- * small roots (appended to the small stage's roots) and empty leaves. The bases in `a` are where
- * this level's new node ids, small roots, small references and leaf references start. */
+/* Write this level's node records and create its children: the next level's large nodes, deep
+ * roots (appended to the depth-first schedule's), new small roots (appended to the small stage's
+ * roots) and empty leaves. The bases in `a` are where this level's new node ids, deep roots and
+ * their references, small roots, small references and leaf references start. */
 __kernel void kd_emit_large_children(KdLargeLevelArgs a, __global const KdLargeNode* node,
                                      __global const uint* node_ref_count,
                                      __global const KdLargeSplit* node_split,
@@ -347,7 +390,10 @@ __kernel void kd_emit_large_children(KdLargeLevelArgs a, __global const KdLargeN
                                      __global KdLargeNode* next_node,
                                      __global uint* next_ref_start, __global uint* next_ref_count,
                                      __global uint* next_chunk_start, __global uint* next_parent,
-                                     __global KdSmallRoot* small_roots) {
+                                     __global KdSmallRoot* small_roots,
+                                     __global KdLargeNode* deep_node,
+                                     __global uint* deep_ref_start,
+                                     __global uint* deep_ref_count) {
     const uint i = get_global_id(0);
     const uint nodes = a.nodes;
     if (i >= nodes) return;
@@ -407,6 +453,16 @@ __kernel void kd_emit_large_children(KdLargeLevelArgs a, __global const KdLargeN
             next_ref_count[j] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s);
             next_chunk_start[j] = kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_CHUNKS, s);
             next_parent[j] = s;
+        } else if (kd_slot_value(slot_rank, slots, KDRAY_SLOT_DEEP, s)) {
+            const uint j = a.deep_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_DEEP, s);
+            KdLargeNode deep;
+            deep.box = kd_build_box_of(child);
+            deep.id = id;
+            deep.depth = child_depth;
+            deep_node[j] = deep;
+            deep_ref_start[j] =
+                a.deep_ref_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_DEEP_REFS, s);
+            deep_ref_count[j] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_DEEP_REFS, s);
         } else if (kd_slot_value(slot_rank, slots, KDRAY_SLOT_SMALL, s)) {
             const uint q = a.small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
             KdSmallRoot root;
@@ -426,46 +482,66 @@ __kernel void kd_emit_large_children(KdLargeLevelArgs a, __global const KdLargeN
 }
 
 /* Where node i's children take chunk c's references (both distribute kernels): per side, the
- * index of the chunk's first reference there (the child's first reference, in the next level or
- * in the small roots' list, plus the chunk's rank within the node), whether the child stays large,
- * and its small root otherwise. */
+ * index of the chunk's first reference there (the child's first reference, in the next level, in
+ * the deep roots' list or in the small roots' list, plus the chunk's rank within the node), the
+ * child's kind (KDRAY_SLOT_LARGE, KDRAY_SLOT_DEEP or KDRAY_SLOT_SMALL), and its small root. */
 KDRAY_INLINE void kd_child_targets(KdLargeLevelArgs a, uint i, uint c,
                                    __global const uint* chunk_rank,
-                                   __global const uint* slot_rank, uint* dst, uint* large,
+                                   __global const uint* slot_rank, uint* dst, uint* kind,
                                    uint* root) {
     const uint slots = 2 * a.nodes;
     for (uint side = 0; side < 2; ++side) {
         const uint s = 2 * i + side;
-        large[side] = kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s);
         const uint within = chunk_rank[side * a.chunks + c];
-        dst[side] = within + (large[side]
-                                  ? kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s)
-                                  : a.small_ref_base +
-                                        kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s));
+        if (kd_slot_value(slot_rank, slots, KDRAY_SLOT_LARGE, s)) {
+            kind[side] = KDRAY_SLOT_LARGE;
+            dst[side] = within + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_LARGE_REFS, s);
+        } else if (kd_slot_value(slot_rank, slots, KDRAY_SLOT_DEEP, s)) {
+            kind[side] = KDRAY_SLOT_DEEP;
+            dst[side] = within + a.deep_ref_base +
+                        kd_slot_rank(slot_rank, slots, KDRAY_SLOT_DEEP_REFS, s);
+        } else {
+            kind[side] = KDRAY_SLOT_SMALL;
+            dst[side] = within + a.small_ref_base +
+                        kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL_REFS, s);
+        }
         root[side] = a.small_root_base + kd_slot_rank(slot_rank, slots, KDRAY_SLOT_SMALL, s);
     }
 }
 
+/* The arrays a level's references go to (both distribute kernels): the next level's, the deep
+ * roots' and the small roots'. */
+typedef struct KdChildRefs {
+    __global uint* next_tri;
+    __global float* next_box;
+    __global uint* deep_tri;
+    __global float* deep_box;
+    __global uint* small_tri;
+    __global float* small_box;
+    __global uint* small_root;
+} KdChildRefs;
+
 /* Reference r (triangle tri, KDRAY_BELOW/ABOVE/CLIPPED `sides`) to its child on `side` at index
- * `at`: its box (the clipped one when it straddled) to the next level or to the child's small
- * root, and into sent[side], the union of what the chunk sends there. */
+ * `at`: its box (the clipped one when it straddled) to the next level, to the deep roots' list or
+ * to the child's small root, and into sent[side], the union of what the chunk sends there. */
 KDRAY_INLINE void kd_send_reference(uint r, uint refs, uint tri, uint sides, uint side, uint at,
-                                    uint large, uint root, __global const float* ref_box,
-                                    __global const float* child_box, __global uint* next_ref_tri,
-                                    __global float* next_ref_box, __global uint* small_ref_tri,
-                                    __global float* small_ref_box,
-                                    __global uint* small_ref_root, KdBox* sent) {
+                                    uint kind, uint root, __global const float* ref_box,
+                                    __global const float* child_box, const KdChildRefs* out,
+                                    KdBox* sent) {
     const KdBox b = kd_load_box(sides & KDRAY_CLIPPED ? child_box : ref_box,
                                 sides & KDRAY_CLIPPED ? (size_t)side * refs + r : r);
     sent[side].lo = fmin(sent[side].lo, b.lo);
     sent[side].hi = fmax(sent[side].hi, b.hi);
-    if (large) {
-        next_ref_tri[at] = tri;
-        kd_store_box(next_ref_box, at, b);
+    if (kind == KDRAY_SLOT_LARGE) {
+        out->next_tri[at] = tri;
+        kd_store_box(out->next_box, at, b);
+    } else if (kind == KDRAY_SLOT_DEEP) {
+        out->deep_tri[at] = tri;
+        kd_store_box(out->deep_box, at, b);
     } else {
-        small_ref_tri[at] = tri;
-        kd_store_box(small_ref_box, at, b);
-        small_ref_root[at] = root;
+        out->small_tri[at] = tri;
+        kd_store_box(out->small_box, at, b);
+        out->small_root[at] = root;
     }
 }
 
@@ -482,8 +558,9 @@ __kernel void kd_distribute_chunks(
     __global const uchar* ref_sides, __global const float* child_box,
     __global const KdLargeSplit* split, __global const uint* chunk_rank,
     __global const uint* slot_rank, __global uint* next_ref_tri, __global float* next_ref_box,
-    __global uint* small_ref_tri, __global float* small_ref_box, __global uint* small_ref_root,
-    __global uint* leaf_refs, __global float* side_box) {
+    __global uint* deep_ref_tri, __global float* deep_ref_box, __global uint* small_ref_tri,
+    __global float* small_ref_box, __global uint* small_ref_root, __global uint* leaf_refs,
+    __global float* side_box) {
     const uint c = get_global_id(0);
     const uint chunks = a.chunks, refs = a.refs, nodes = a.nodes;
     if (c >= chunks) return;
@@ -503,15 +580,16 @@ __kernel void kd_distribute_chunks(
         kd_store_box(side_box, chunks + c, sent[1]);
         return;
     }
-    uint dst[2], large[2], root[2];
-    kd_child_targets(a, i, c, chunk_rank, slot_rank, dst, large, root);
+    uint dst[2], kind[2], root[2];
+    kd_child_targets(a, i, c, chunk_rank, slot_rank, dst, kind, root);
+    const KdChildRefs out = {next_ref_tri,  next_ref_box,  deep_ref_tri,  deep_ref_box,
+                             small_ref_tri, small_ref_box, small_ref_root};
     for (uint r = begin; r < end; ++r) {
         const uint sides = ref_sides[r], tri = ref_tri[r];
         for (uint side = 0; side < 2; ++side)
             if (sides & (side == 0 ? KDRAY_BELOW : KDRAY_ABOVE))
-                kd_send_reference(r, refs, tri, sides, side, dst[side]++, large[side], root[side],
-                                  ref_box, child_box, next_ref_tri, next_ref_box, small_ref_tri,
-                                  small_ref_box, small_ref_root, sent);
+                kd_send_reference(r, refs, tri, sides, side, dst[side]++, kind[side], root[side],
+                                  ref_box, child_box, &out, sent);
     }
     kd_store_box(side_box, c, sent[0]);
     kd_store_box(side_box, chunks + c, sent[1]);
@@ -540,3 +618,6 @@ __kernel void kd_union_parent_boxes(__global const uint* parent, __global const 
 
 /* The same passes with a work-item per reference (the element-parallel large stage). */
 #include "cl/builder/kernels/build_large_groups.cl"
+
+/* The stage's depth-first schedule below the top levels (CPU devices). */
+#include "cl/builder/kernels/build_large_depth_first.cl"

@@ -207,8 +207,9 @@ __kernel void kd_distribute_chunk_groups(
     __global const uchar* ref_sides, __global const float* child_box,
     __global const KdLargeSplit* split, __global const uint* chunk_rank,
     __global const uint* slot_rank, __global uint* next_ref_tri, __global float* next_ref_box,
-    __global uint* small_ref_tri, __global float* small_ref_box, __global uint* small_ref_root,
-    __global uint* leaf_refs, __global float* side_box) {
+    __global uint* deep_ref_tri, __global float* deep_ref_box, __global uint* small_ref_tri,
+    __global float* small_ref_box, __global uint* small_ref_root, __global uint* leaf_refs,
+    __global float* side_box) {
     __local uint scratch[KDRAY_REDUCE_CHUNK];
     __local int sent_key[2 * KDRAY_BOX_FLOATS]; /* per side: lo.xyz (min), hi.xyz (max) */
     const uint c = get_group_id(0), l = get_local_id(0), g = get_local_size(0);
@@ -232,8 +233,10 @@ __kernel void kd_distribute_chunk_groups(
     }
     for (uint k = l; k < 2 * KDRAY_BOX_FLOATS; k += g)
         sent_key[k] = kd_ordered_key(k % KDRAY_BOX_FLOATS < 3 ? INFINITY : -INFINITY);
-    uint dst[2], large[2], root[2];
-    kd_child_targets(a, i, c, chunk_rank, slot_rank, dst, large, root);
+    uint dst[2], kind[2], root[2];
+    kd_child_targets(a, i, c, chunk_rank, slot_rank, dst, kind, root);
+    const KdChildRefs out = {next_ref_tri,  next_ref_box,  deep_ref_tri,  deep_ref_box,
+                             small_ref_tri, small_ref_box, small_ref_root};
     for (uint round = begin; round < end; round += g) {
         const uint r = round + l;
         const uint sides = r < end ? ref_sides[r] : 0u;
@@ -247,9 +250,7 @@ __kernel void kd_distribute_chunk_groups(
                 if (sides & (side == 0 ? KDRAY_BELOW : KDRAY_ABOVE))
                     kd_send_reference(r, refs, tri, sides, side,
                                       dst[side] + (side == 0 ? before & 0xFFFFu : before >> 16),
-                                      large[side], root[side], ref_box, child_box, next_ref_tri,
-                                      next_ref_box, small_ref_tri, small_ref_box, small_ref_root,
-                                      sent);
+                                      kind[side], root[side], ref_box, child_box, &out, sent);
         }
         dst[0] += total & 0xFFFFu;
         dst[1] += total >> 16;

@@ -49,6 +49,10 @@ KDRAY_INLINE KdBox kd_bin_box(KdBox box, __global const float* tight_box, uint i
  * the one entry kd_sum_node_bins made of them. A plane's counts are those of
  * the bins: below, the references whose lo bin lies before it; above, those whose hi bin lies at
  * or after it. The exact classification follows the choice. */
+KDRAY_INLINE int kd_best_binned_plane(KdBox box, KdBox tight, const uint* counts, uint count,
+                                      float cost_traversal, float cost_intersection,
+                                      float empty_bonus, uint* axis, float* pos);
+
 KDRAY_INLINE int kd_best_large_split(KdBox box, KdBox tight, __global const uint* bins,
                                      uint first, uint end, uint count,
                                      float cost_traversal, float cost_intersection,
@@ -59,6 +63,15 @@ KDRAY_INLINE int kd_best_large_split(KdBox box, KdBox tight, __global const uint
         __global const uint* in = bins + (size_t)c * KDRAY_BIN_VALUES;
         for (uint k = 0; k < KDRAY_BIN_VALUES; ++k) counts[k] += in[k];
     }
+    return kd_best_binned_plane(box, tight, counts, count, cost_traversal, cost_intersection,
+                                empty_bonus, axis, pos);
+}
+
+/* kd_best_large_split's choice from a node's summed bins (`counts`, KDRAY_BIN_VALUES of them):
+ * also the depth-first stage's, which bins a node's references itself. */
+KDRAY_INLINE int kd_best_binned_plane(KdBox box, KdBox tight, const uint* counts, uint count,
+                                      float cost_traversal, float cost_intersection,
+                                      float empty_bonus, uint* axis, float* pos) {
     const float3 e = box.hi - box.lo;
     const float cost_scale = cost_intersection / kd_box_area(box);
     float best = INFINITY;

@@ -7,17 +7,17 @@
  *   kd_place_subtrees        top down, one launch per batch: each child's preorder position (below
  *                            child right after its parent, above child after the below subtree)
  *                            and its first leaf index
+ *   kd_size_regions,         the same for the records of the large stage's depth-first
+ *   kd_place_regions         schedule, a work-item per subtree (build_large_depth_first.cl)
  *   kd_write_nodes           the large stage's nodes: KdNode and leaf triangle ids
  *   kd_write_small_subtrees  per small root: its subtree, already in preorder, moved into place */
 #include "cl/builder/kernels/build_common.cl"
 
-__kernel void kd_size_subtrees(uint begin, uint count, __global const KdBuildNode* records,
-                               __global const uint* small_node_count,
-                               __global const uint* small_leaf_refs, __global uint* subtree_nodes,
-                               __global uint* subtree_refs) {
-    const uint k = get_global_id(0);
-    if (k >= count) return;
-    const uint id = begin + k;
+/* Record id's subtree: its nodes and leaf references, from its children's. */
+KDRAY_INLINE void kd_size_subtree(uint id, __global const KdBuildNode* records,
+                                  __global const uint* small_node_count,
+                                  __global const uint* small_leaf_refs,
+                                  __global uint* subtree_nodes, __global uint* subtree_refs) {
     const KdBuildNode n = records[id];
     if (n.axis == KDRAY_SMALL_ROOT_AXIS) {
         subtree_nodes[id] = small_node_count[n.leaf_first];
@@ -31,17 +31,67 @@ __kernel void kd_size_subtrees(uint begin, uint count, __global const KdBuildNod
     }
 }
 
+__kernel void kd_size_subtrees(uint begin, uint count, __global const KdBuildNode* records,
+                               __global const uint* small_node_count,
+                               __global const uint* small_leaf_refs, __global uint* subtree_nodes,
+                               __global uint* subtree_refs) {
+    const uint k = get_global_id(0);
+    if (k >= count) return;
+    kd_size_subtree(begin + k, records, small_node_count, small_leaf_refs, subtree_nodes,
+                    subtree_refs);
+}
+
+/* Record id's children, when it is an inner node. */
+KDRAY_INLINE void kd_place_record(uint id, __global const KdBuildNode* records,
+                                  __global const uint* subtree_nodes,
+                                  __global const uint* subtree_refs, __global uint* position,
+                                  __global uint* leaf_position) {
+    const KdBuildNode n = records[id];
+    if (n.axis == KDRAY_LEAF_AXIS || n.axis == KDRAY_SMALL_ROOT_AXIS) return;
+    kd_place_children(id, n.child[0], n.child[1], subtree_nodes, subtree_refs, position,
+                      leaf_position);
+}
+
 __kernel void kd_place_subtrees(uint begin, uint count, __global const KdBuildNode* records,
                                 __global const uint* subtree_nodes,
                                 __global const uint* subtree_refs, __global uint* position,
                                 __global uint* leaf_position) {
     const uint k = get_global_id(0);
     if (k >= count) return;
-    const uint id = begin + k;
-    const KdBuildNode n = records[id];
-    if (n.axis == KDRAY_LEAF_AXIS || n.axis == KDRAY_SMALL_ROOT_AXIS) return;
-    kd_place_children(id, n.child[0], n.child[1], subtree_nodes, subtree_refs, position,
-                      leaf_position);
+    kd_place_record(begin + k, records, subtree_nodes, subtree_refs, position, leaf_position);
+}
+
+/* The depth-first large stage's regions (KdLargeRegion, build_large_depth_first.cl): one
+ * work-item each walks its records, made parents before children, backwards to size them (its
+ * root last: a root's record is also in a batch, which sizes it again, alike) and forwards from
+ * its root to place them. Sizes before the batches' sizes, places after the batches' places. */
+__kernel void kd_size_regions(uint regions, __global const KdLargeRegion* region,
+                              __global const KdBuildNode* records,
+                              __global const uint* small_node_count,
+                              __global const uint* small_leaf_refs, __global uint* subtree_nodes,
+                              __global uint* subtree_refs) {
+    const uint w = get_global_id(0);
+    if (w >= regions) return;
+    const KdLargeRegion r = region[w];
+    for (uint k = r.count; k-- > 0;)
+        kd_size_subtree(r.first + k, records, small_node_count, small_leaf_refs, subtree_nodes,
+                        subtree_refs);
+    kd_size_subtree(r.root, records, small_node_count, small_leaf_refs, subtree_nodes,
+                    subtree_refs);
+}
+
+__kernel void kd_place_regions(uint regions, __global const KdLargeRegion* region,
+                               __global const KdBuildNode* records,
+                               __global const uint* subtree_nodes,
+                               __global const uint* subtree_refs, __global uint* position,
+                               __global uint* leaf_position) {
+    const uint w = get_global_id(0);
+    if (w >= regions) return;
+    const KdLargeRegion r = region[w];
+    kd_place_record(r.root, records, subtree_nodes, subtree_refs, position, leaf_position);
+    for (uint k = 0; k < r.count; ++k)
+        kd_place_record(r.first + k, records, subtree_nodes, subtree_refs, position,
+                        leaf_position);
 }
 
 /* Nodes of the large stage; its leaves list their triangles in the builder's leaf store. */

@@ -4,13 +4,13 @@
  * then one sizeof each, in the order KdNode, KdRay, KdHit, KdMaterial, KdLight, KdView,
  * KdRayCounts, KdBuildBox, KdBuildNode, KdSmallNode, KdLargeNode, KdLargeSplit, KdLargeCuts,
  * KdSmallRoot, KdLargeSplitArgs, KdLargeLevelArgs, KdSmallBatchArgs, KdEmitter, KdTexture,
- * KdSmallLevelNode, KdSceneLayout, KdRenderLaunch, KdTraceCost. */
+ * KdSmallLevelNode, KdSceneLayout, KdRenderLaunch, KdTraceCost, KdDepthFirstArgs, KdLargeRegion, KdDepthFirstTask. */
 #include "core/device/kd_build_shared.h"
 #include "core/device/kd_shared.h"
 
 __kernel void kd_report_layout(__global uint* out) {
     if (get_global_id(0) != 0) return;
-    out[0] = 23;
+    out[0] = 26;
     out[1] = sizeof(KdNode);
     out[2] = sizeof(KdRay);
     out[3] = sizeof(KdHit);
@@ -34,4 +34,7 @@ __kernel void kd_report_layout(__global uint* out) {
     out[21] = sizeof(KdSceneLayout);
     out[22] = sizeof(KdRenderLaunch);
     out[23] = sizeof(KdTraceCost);
+    out[24] = sizeof(KdDepthFirstArgs);
+    out[25] = sizeof(KdLargeRegion);
+    out[26] = sizeof(KdDepthFirstTask);
 }

@@ -1,0 +1,196 @@
+// large_depth_first.cpp — the host side of the large stage's depth-first schedule
+// (build_large_depth_first.cl; large_depth_first.h): arenas sized per deep root, the subtrees
+// built, then committed to the build's stores.
+#include "cl/builder/large_depth_first.h"
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "cl/runtime/launch.h"
+#include "core/error.h"
+
+namespace kdray::build_detail {
+namespace {
+
+/* A deep root holds at most this many references: its workspace (28 bytes a reference, twice
+ * over with the lists a split writes) stays within a core's L2 cache (512 KiB on the EPYC the
+ * figures come from). */
+constexpr std::size_t kCacheReferences = 8192;
+
+/* ... and at least a few subtrees per compute unit, whose sizes differ, so that the cores'
+ * shares even out. */
+constexpr std::size_t kSubtreesPerUnit = 4;
+
+/* An arena's capacity for a subtree of n references, doubled `grow` times (after it ran out;
+ * halved while negative, tests). */
+std::uint64_t arena_capacity(unsigned kind, std::uint64_t n, std::uint64_t threshold, int grow) {
+    std::uint64_t cap = 0;
+    switch (kind) {
+        case KDRAY_DF_WORK:
+            // The stack of live references and the top node's above list; fixed, since a full
+            // workspace makes budget leaves instead of a retry.
+            return kReferenceBudgetPerTriangle * n;
+        case KDRAY_DF_RECORDS:
+            // About 2n / T large nodes, each two records, more with empty-space cuts: up to
+            // 0.17 n at T = 64 on the shared scenes.
+            cap = 16 * n / threshold + 16;
+            break;
+        case KDRAY_DF_ROOTS:
+            // Up to 0.054 n at T = 64.
+            cap = 8 * n / threshold + 16;
+            break;
+        case KDRAY_DF_SMALL_REFS:
+            // Clipping copies straddlers: up to 2.2 references per reference of the deep root
+            // (Kitchen at high).
+            cap = 3 * n + 64;
+            break;
+        default:  // KDRAY_DF_LEAF_REFS: only nodes at the depth limit or that nothing separates
+            cap = n / 4 + 64;
+            break;
+    }
+    return grow >= 0 ? cap << grow : cap >> -grow;
+}
+
+/// Starts of every arena kind (KDRAY_DF_KINDS rows of nodes + 1), from each subtree's size.
+std::vector<cl_uint> arena_starts(const std::vector<cl_uint>& refs, std::uint64_t threshold,
+                                  const std::vector<std::array<int, KDRAY_DF_KINDS>>& grow) {
+    const std::size_t nodes = refs.size();
+    std::vector<cl_uint> start(KDRAY_DF_KINDS * (nodes + 1));
+    for (unsigned kind = 0; kind < KDRAY_DF_KINDS; ++kind) {
+        std::uint64_t at = 0;
+        for (std::size_t w = 0; w <= nodes; ++w) {
+            start[kind * (nodes + 1) + w] = checked_u32(at, "depth-first arena entries");
+            if (w < nodes) at += arena_capacity(kind, refs[w], threshold, grow[w][kind]);
+        }
+    }
+    return start;
+}
+
+/// The arenas of one run of the depth-first kernel.
+struct Arenas {
+    DeviceArray start, work_tri, work_box, records, roots, small_tri, small_box, leaf_refs, stacks,
+        counts;
+};
+
+cl_uint arena_total(const std::vector<cl_uint>& start, unsigned kind, std::size_t nodes) {
+    // At least one entry: OpenCL has no empty buffers.
+    return std::max<cl_uint>(1, start[kind * (nodes + 1) + nodes]);
+}
+
+}  // namespace
+
+cl_uint deep_root_refs(const BuildContext& ctx, std::size_t triangles) {
+    const std::size_t units = std::max(1u, ctx.device.info().compute_units);
+    const std::size_t share = triangles / (kSubtreesPerUnit * units);
+    const std::size_t floor = std::size_t(ctx.params.large_node_threshold) * 16;
+    return cl_uint(std::clamp(share, floor, std::max(floor, kCacheReferences)));
+}
+
+DepthFirstResult build_depth_first(BuildContext& ctx, const TriangleBounds& triangles,
+                                   const DeepRoots& deep, BuildOutput& output, SmallRoots& small,
+                                   unsigned arena_shift) {
+    const std::size_t nodes = deep.count;
+    std::vector<cl_uint> refs(nodes);
+    ctx.device.read(deep.ref_count.buffer(), 0, nodes * sizeof(cl_uint), refs.data(),
+                    "reading the depth-first subtrees' sizes");
+    const BuildParams& p = ctx.params;
+    const KdDepthFirstArgs args{cl_uint(nodes),
+                                cl_uint(p.max_depth),
+                                cl_uint(p.large_node_threshold),
+                                p.empty_space_ratio,
+                                p.costs.traversal,
+                                p.costs.intersection,
+                                p.empty_bonus,
+                                cl_uint(kReferenceBudgetPerTriangle)};
+
+    /* Build; an output arena that ran out is made 4 times larger for its subtree and the kernel
+     * runs again (it only reads the deep roots). Real scenes fit at the first run; input whose
+     * splits cut most triangles fills arenas of any size made from the root's size alone (the
+     * per-depth budget bounds each depth, not their sum), and takes a few runs. */
+    const int shift = -int(arena_shift);
+    std::vector<std::array<int, KDRAY_DF_KINDS>> grow(nodes, {0, shift, shift, shift, shift});
+    std::vector<cl_uint> start, counts(nodes * KDRAY_DF_COUNTS);
+    Arenas a;
+    DepthFirstResult result;
+    for (int round = 0;; ++round) {
+        result.rounds = round + 1;
+        start = arena_starts(refs, cl_uint(p.large_node_threshold), grow);
+        a.start = ctx.allocate<cl_uint>(start.size(), "depth-first arena starts");
+        ctx.write(a.start, start);
+        const std::size_t work = arena_total(start, KDRAY_DF_WORK, nodes);
+        a.work_tri = ctx.allocate<cl_uint>(work, "depth-first workspace references");
+        a.work_box = ctx.allocate<KdBuildBox>(work, "depth-first workspace boxes");
+        a.records = ctx.allocate<KdBuildNode>(arena_total(start, KDRAY_DF_RECORDS, nodes),
+                                              "depth-first node records");
+        a.roots = ctx.allocate<KdSmallRoot>(arena_total(start, KDRAY_DF_ROOTS, nodes),
+                                            "depth-first small roots");
+        const std::size_t small_refs = arena_total(start, KDRAY_DF_SMALL_REFS, nodes);
+        a.small_tri = ctx.allocate<cl_uint>(small_refs, "depth-first small references");
+        a.small_box = ctx.allocate<KdBuildBox>(small_refs, "depth-first small reference boxes");
+        a.leaf_refs = ctx.allocate<cl_uint>(arena_total(start, KDRAY_DF_LEAF_REFS, nodes),
+                                            "depth-first leaf references");
+        a.stacks = ctx.allocate<KdDepthFirstTask>(nodes * KDRAY_DF_STACK, "depth-first stacks");
+        a.counts = ctx.allocate<cl_uint>(counts.size(), "depth-first counts");
+        enqueue_per_item(ctx.device, ctx.kernels.build_depth_first, nodes, args, deep.node.buffer(),
+                         deep.ref_start.buffer(), deep.ref_count.buffer(), deep.ref_tri.buffer(),
+                         deep.ref_box.buffer(), triangles.triangles.buffer(), a.start.buffer(),
+                         a.work_tri.buffer(), a.work_box.buffer(), a.records.buffer(),
+                         a.roots.buffer(), a.small_tri.buffer(), a.small_box.buffer(),
+                         a.leaf_refs.buffer(), a.stacks.buffer(), a.counts.buffer());
+        ctx.device.read(a.counts.buffer(), 0, counts.size() * sizeof(cl_uint), counts.data(),
+                        "reading the depth-first subtrees' counts");
+        bool full = false;
+        for (std::size_t w = 0; w < nodes; ++w)
+            for (unsigned kind = 1; kind < KDRAY_DF_KINDS; ++kind)
+                if (counts[w * KDRAY_DF_COUNTS + KDRAY_DF_WORK] & (1u << kind)) {
+                    grow[w][kind] += 2;
+                    full = true;
+                }
+        if (!full) break;
+        if (round == 16 + int(arena_shift))
+            throw Error(
+                "OpenCL kd-tree build: the depth-first large stage's arenas kept running "
+                "out after " +
+                std::to_string(round + 1) + " rounds");
+    }
+
+    /* Where each subtree's output goes: after what the levels made, subtree after subtree. */
+    std::vector<cl_uint> base(KDRAY_DF_KINDS * nodes, 0);
+    std::array<std::uint64_t, KDRAY_DF_KINDS> at{0, output.node_count, small.count, small.refs,
+                                                 output.leaf_refs};
+    for (std::size_t w = 0; w < nodes; ++w) {
+        const cl_uint* used = &counts[w * KDRAY_DF_COUNTS];
+        for (unsigned kind = 1; kind < KDRAY_DF_KINDS; ++kind) {
+            base[kind * nodes + w] = checked_u32(at[kind], "depth-first output entries");
+            // A subtree's root keeps the record id its level gave it.
+            at[kind] += used[kind] - (kind == KDRAY_DF_RECORDS ? 1 : 0);
+        }
+        result.budget_leaves += used[KDRAY_DF_BUDGET_LEAVES];
+    }
+    output.reserve_records(ctx, at[KDRAY_DF_RECORDS]);
+    small.reserve(ctx, checked_u32(at[KDRAY_DF_ROOTS], "small roots"),
+                  checked_u32(at[KDRAY_DF_SMALL_REFS], "small references"));
+    const cl_uint leaf_total = checked_u32(at[KDRAY_DF_LEAF_REFS], "leaf references");
+    ctx.reserve<cl_uint>(output.leaf_store, std::max<cl_uint>(1, leaf_total), output.leaf_refs,
+                         "leaf references");
+    DeviceArray base_array = ctx.allocate<cl_uint>(base.size(), "depth-first output bases");
+    ctx.write(base_array, base);
+    output.regions = ctx.allocate<KdLargeRegion>(nodes, "depth-first subtrees");
+    enqueue_per_item(ctx.device, ctx.kernels.commit_depth_first, nodes, cl_uint(nodes),
+                     a.start.buffer(), a.counts.buffer(), base_array.buffer(), deep.node.buffer(),
+                     a.records.buffer(), a.roots.buffer(), a.small_tri.buffer(),
+                     a.small_box.buffer(), a.leaf_refs.buffer(), output.records.buffer(),
+                     small.roots.buffer(), small.ref_tri.buffer(), small.ref_box.buffer(),
+                     small.ref_root.buffer(), output.leaf_store.buffer(), output.regions.buffer());
+    output.region_count = cl_uint(nodes);
+    output.node_count = cl_uint(at[KDRAY_DF_RECORDS]);
+    small.count = cl_uint(at[KDRAY_DF_ROOTS]);
+    small.refs = cl_uint(at[KDRAY_DF_SMALL_REFS]);
+    output.leaf_refs = leaf_total;
+    return result;
+}
+
+}  // namespace kdray::build_detail
