@@ -59,23 +59,9 @@ __kernel void kd_bin_large_chunks(__global const float* ref_box, __global const 
     const uint i = kd_find_segment(node_chunk, nodes, c);
     const uint begin = node_start[i] + (c - node_chunk[i]) * KDRAY_REDUCE_CHUNK;
     const uint end = min(node_start[i] + node_count[i], begin + KDRAY_REDUCE_CHUNK);
-    const KdBox tight = kd_bin_box(kd_box_of(node[i].box), tight_box, i);
-    const float4 extent = (float4)(tight.hi - tight.lo, 0.0f);
-    const float4 scale =
-        select((float4)(0.0f), (float)KDRAY_LARGE_BINS / extent, extent > (float4)(0.0f));
-    const float4 lo = (float4)(tight.lo, 0.0f);
     uint counts[KDRAY_BIN_VALUES];
-    for (uint k = 0; k < KDRAY_BIN_VALUES; ++k) counts[k] = 0;
-    for (uint r = begin; r < end; ++r) {
-        uint4 lo_bin, hi_bin;
-        kd_large_bins(kd_load_box(ref_box, r), lo, scale, &lo_bin, &hi_bin);
-        ++counts[lo_bin.x];
-        ++counts[KDRAY_LARGE_BINS + hi_bin.x];
-        ++counts[2 * KDRAY_LARGE_BINS + lo_bin.y];
-        ++counts[3 * KDRAY_LARGE_BINS + hi_bin.y];
-        ++counts[4 * KDRAY_LARGE_BINS + lo_bin.z];
-        ++counts[5 * KDRAY_LARGE_BINS + hi_bin.z];
-    }
+    kd_bin_references(ref_box, begin, end, kd_bin_box(kd_box_of(node[i].box), tight_box, i),
+                      counts);
     __global uint* out = chunk_bins + (size_t)c * KDRAY_BIN_VALUES;
     for (uint k = 0; k < KDRAY_BIN_VALUES; ++k) out[k] = counts[k];
 }

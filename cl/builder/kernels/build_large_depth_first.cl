@@ -216,22 +216,8 @@ __kernel void kd_build_large_depth_first(
         kd_median_plane(box, &axis, &pos);
 #if KDRAY_LARGE_BINS > 0
         {
-            const float4 extent = (float4)(tight.hi - tight.lo, 0.0f);
-            const float4 scale = select((float4)(0.0f), (float)KDRAY_LARGE_BINS / extent,
-                                        extent > (float4)(0.0f));
-            const float4 lo = (float4)(tight.lo, 0.0f);
             uint bins[KDRAY_BIN_VALUES];
-            for (uint k = 0; k < KDRAY_BIN_VALUES; ++k) bins[k] = 0;
-            for (uint r = b; r < b + n; ++r) {
-                uint4 lo_bin, hi_bin;
-                kd_large_bins(kd_load_box(wb, r), lo, scale, &lo_bin, &hi_bin);
-                ++bins[lo_bin.x];
-                ++bins[KDRAY_LARGE_BINS + hi_bin.x];
-                ++bins[2 * KDRAY_LARGE_BINS + lo_bin.y];
-                ++bins[3 * KDRAY_LARGE_BINS + hi_bin.y];
-                ++bins[4 * KDRAY_LARGE_BINS + lo_bin.z];
-                ++bins[5 * KDRAY_LARGE_BINS + hi_bin.z];
-            }
+            kd_bin_references(wb, b, b + n, tight, bins);
             kd_best_binned_plane(box, tight, bins, n, args.cost_traversal,
                                  args.cost_intersection, args.empty_bonus, &axis, &pos);
         }

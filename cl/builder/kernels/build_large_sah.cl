@@ -35,6 +35,27 @@ KDRAY_INLINE void kd_large_bins(KdBox b, float4 lo, float4 scale, uint4* lo_bin,
     *hi_bin = min(convert_uint4_sat_rtz(before_hi), last);
 }
 
+/* counts[KDRAY_BIN_VALUES]: the bins of boxes[begin .. end) over `tight` (both large stages: a
+ * reduction chunk's, a depth-first node's). */
+KDRAY_INLINE void kd_bin_references(__global const float* boxes, uint begin, uint end, KdBox tight,
+                                    uint* counts) {
+    const float4 extent = (float4)(tight.hi - tight.lo, 0.0f);
+    const float4 scale =
+        select((float4)(0.0f), (float)KDRAY_LARGE_BINS / extent, extent > (float4)(0.0f));
+    const float4 lo = (float4)(tight.lo, 0.0f);
+    for (uint k = 0; k < KDRAY_BIN_VALUES; ++k) counts[k] = 0;
+    for (uint r = begin; r < end; ++r) {
+        uint4 lo_bin, hi_bin;
+        kd_large_bins(kd_load_box(boxes, r), lo, scale, &lo_bin, &hi_bin);
+        ++counts[lo_bin.x];
+        ++counts[KDRAY_LARGE_BINS + hi_bin.x];
+        ++counts[2 * KDRAY_LARGE_BINS + lo_bin.y];
+        ++counts[3 * KDRAY_LARGE_BINS + hi_bin.y];
+        ++counts[4 * KDRAY_LARGE_BINS + lo_bin.z];
+        ++counts[5 * KDRAY_LARGE_BINS + hi_bin.z];
+    }
+}
+
 /* The tight box a node's bins divide: its references' bounds within the node's box. */
 KDRAY_INLINE KdBox kd_bin_box(KdBox box, __global const float* tight_box, uint i) {
     KdBox tight = kd_load_box(tight_box, i);
