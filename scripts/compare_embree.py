@@ -12,7 +12,7 @@ only when ../shared itself is absent, so that CTest reports a skip.
 
   scripts/compare_embree.py --kdray build/kdray [--builder reference] [--tracer reference]
       [--quality low,medium,high] [--small-stage auto|per-root|per-level]
-      [--large-stage auto|chunked|level]
+      [--large-stage auto|chunked|level|depth-first]
                             [--quick] [--peer PATH]
 """
 import argparse

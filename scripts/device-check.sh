@@ -140,7 +140,7 @@ done
 # The large stage in each shape (auto runs one of them): what the schedule costs on this device.
 kitchen=bart-kitchen/frame_000
 if [ -e "$here/scenes/$kitchen.obj" ]; then
-    for stage in chunked level; do
+    for stage in chunked level depth-first; do
         step "build-bart-kitchen-medium-$stage" 120 \
             "$out/bench/build-bart-kitchen-medium-$stage.json" "$kdray" build \
             "$here/scenes/$kitchen.obj" --json --quality medium --large-stage "$stage" \

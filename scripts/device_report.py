@@ -2,7 +2,7 @@
 """The device check's results as docs/bench-gpu.json and docs/bench-gpu.md: what
 scripts/device-check.sh wrote on a lent GPU machine (its $OUT folder, or a .tgz of it), condensed
 to the figures the builder issue (#28) asks for on a GPU: each scene's build at each quality with
-each stage's share, the large stage's two shapes, the frames traced, and the correctness cases'
+each stage's share, the large stage's shapes, the frames traced, and the correctness cases'
 agreement with the CPU reference.
 
     scripts/device_report.py CHECK_DIR_OR_TGZ --commit COMMIT [--out docs/bench-gpu]
