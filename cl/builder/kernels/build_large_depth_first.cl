@@ -9,11 +9,11 @@
  * compute unit) to a list of their own, and here one work-item builds each deep root's whole
  * large subtree, depth first, down to its small roots and leaves: per node, one pass bins its
  * references for the SAH and one classifies, clips and partitions them, in the work-item's own
- * workspace, which stays in its core's cache. The rules are the level stage's own helpers
- * (kd_empty_space_cuts, kd_median_plane, kd_best_binned_plane, kd_clip_straddler,
- * kd_plane_or_leaf) and the references keep their order, so the tree is the same node for node
- * (tests/test_opencl_large_stage.cpp). On the 2-core PoCL CPU device the large stage took 25-40%
- * less time than the chunked levels alone (docs/large-stage.md).
+ * workspace, which stays in its core's cache. The rules are the level stage's own
+ * (build_large_rules.cl, and build_large_sah.cl's bins and plane) and the references keep their
+ * order, so the tree is the same node for node (tests/test_opencl_large_stage.cpp). On the
+ * 2-core PoCL CPU device the large stage took 0.53-0.84 of the chunked levels' time
+ * (docs/large-stage.md).
  *
  *   kd_build_large_depth_first   per deep root: its subtree's records, small roots (and their
  *                                references) and leaf references, in arenas of its own
