@@ -11,6 +11,8 @@
 
 #include "cl/builder/build_prewarm.h"
 #include "cl/builder/opencl_builder.h"
+#include "cl/builder/opencl_tree_builder.h"
+#include "cl/runtime/device_session.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
 
@@ -110,6 +112,27 @@ TEST_CASE("opencl builder: a first build takes the buffers made ahead for its tr
         CHECK(ready.device_bytes <= cold.device_bytes * 113 / 100);
         test::check_same_tree(ready_tree, cold_tree, scene, 28);
     }
+}
+
+TEST_CASE("opencl builder: a run's builder makes the first build's buffers once") {
+    // FramePipeline prepares the builder before every frame, after expect_triangles: only the
+    // first prepare makes buffers ahead; the frames after take those the frame before gave back.
+    DeviceSession session("");
+    OpenClTreeBuilder builder(session, {});
+    const std::size_t n = 20000;
+    std::size_t expected = 0;
+    for (const build_detail::ExpectedBuffer& b : build_detail::expected_build_buffers(n))
+        expected += b.bytes;
+    REQUIRE(expected > 0);
+    ClDevice& device = session.device();
+    builder.expect_triangles(n);
+    std::uint64_t before = device.allocated_bytes();
+    builder.prepare();
+    CHECK(device.allocated_bytes() - before >= expected);
+    before = device.allocated_bytes();
+    builder.expect_triangles(n);
+    builder.prepare();
+    CHECK(device.allocated_bytes() - before < expected / 10);
 }
 
 TEST_CASE("opencl builder: nothing is made ahead for a small scene") {

@@ -7,7 +7,10 @@
 namespace kdray {
 
 void OpenClTreeBuilder::prepare() {
-    prepare_opencl_builder(session_.device(), params_, expected_triangles_);
+    // The first build's memory is made ready once: a run prepares before every frame, and later
+    // frames take the buffers the frame before gave back.
+    prepare_opencl_builder(session_.device(), params_, prewarmed_ ? 0 : expected_triangles_);
+    prewarmed_ = prewarmed_ || expected_triangles_ > 0;
 }
 
 BuiltTree OpenClTreeBuilder::build(const Scene& scene) {

@@ -21,7 +21,8 @@ class OpenClTreeBuilder final : public TreeBuilder {
     OpenClTreeBuilder(DeviceSession& session, const BuildParams& params)
         : session_(session), params_(params) {}
 
-    /// Opens the device and builds the builder's programs (prepare_opencl_builder).
+    /// Opens the device and builds the builder's programs (prepare_opencl_builder); the first
+    /// time after expect_triangles, also makes the first build's buffers and warms its launches.
     void prepare() override;
     void expect_triangles(std::size_t triangles) override { expected_triangles_ = triangles; }
     BuiltTree build(const Scene& scene) override;
@@ -33,6 +34,7 @@ class OpenClTreeBuilder final : public TreeBuilder {
     DeviceSession& session_;
     BuildParams params_;
     std::size_t expected_triangles_ = 0;
+    bool prewarmed_ = false;
 };
 
 }  // namespace kdray

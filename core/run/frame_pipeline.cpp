@@ -62,6 +62,9 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
     // Prepare, build, then trace: the programs that the builder and the tracer for these effects
     // need are built (in the first frame; compile_ms) outside build_ms and trace_ms.
     const double compiled_before = options_.compile_ms_so_far ? options_.compile_ms_so_far() : 0;
+    // The first frame's build then finds its memory made and its kernels launched once, as
+    // `kdray build`'s does (build_prewarm.h); the builder does that once per run.
+    builder_.expect_triangles(scene.triangle_count());
     builder_.prepare();
     RenderInputs inputs = prepare_render(scene, settings_, camera, kd_u32(job.number));
     inputs.normals = options_.aov;

@@ -34,8 +34,8 @@ class TreeBuilder {
     /// Does now what would otherwise land in the first build's time (opening the device,
     /// compiling programs).
     virtual void prepare() {}
-    /// The triangle count of the scene the first build will be given, before prepare(): a
-    /// builder may then make that build's memory ready while it prepares (build_prewarm.h).
+    /// The triangle count of the scene the next build will be given, before prepare(): a
+    /// builder may then make the first build's memory ready while it prepares (build_prewarm.h).
     virtual void expect_triangles(std::size_t /*triangles*/) {}
     /// The tree of `scene`, with build_ms the whole build as the caller sees it.
     virtual BuiltTree build(const Scene& scene) = 0;
