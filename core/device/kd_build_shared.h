@@ -247,7 +247,8 @@ typedef struct KdLargeLevelArgs {
 #define KDRAY_DF_LEAF_REFS 4u  /* references of the large nodes that become leaves */
 #define KDRAY_DF_KINDS 5u
 /* In an item's counts, the WORK entry reports instead the arenas that were too small (bit k: kind
- * k), and this extra one the nodes that became leaves because the workspace was full. */
+ * k), and this extra one its budget leaves: nodes left unsplit because their children could take
+ * their depth over the reference budget, or would not fit the workspace. */
 #define KDRAY_DF_BUDGET_LEAVES 5u
 #define KDRAY_DF_COUNTS 6u
 

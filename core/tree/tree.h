@@ -39,7 +39,8 @@ const char* small_stage_name(SmallStage stage);
 /// The stage named `name` (small_stage_name's names), or nothing.
 std::optional<SmallStage> parse_small_stage(std::string_view name);
 
-/// The shape of the OpenCL builder's large-node stage (`--large-stage`); all build the same tree.
+/// The shape of the OpenCL builder's large-node stage (`--large-stage`); all build the same tree
+/// (but for budget leaves, on input whose splits cut most triangles: large_level.h).
 /// Chunked and Level go level by level (Zhou et al. 2008, section 4.1). Chunked: a work-item
 /// walks a reduction chunk of KDRAY_REDUCE_CHUNK references in order (CPU devices, which run a
 /// group's items one after another). Level: the paper's element-parallel shape, a work-item per

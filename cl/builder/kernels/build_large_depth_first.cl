@@ -11,8 +11,10 @@
  * references for the SAH and one classifies, clips and partitions them, in the work-item's own
  * workspace, which stays in its core's cache. The rules are the level stage's own
  * (build_large_rules.cl, and build_large_sah.cl's bins and plane) and the references keep their
- * order, so the tree is the same node for node (tests/test_opencl_large_stage.cpp). On the
- * 2-core PoCL CPU device the large stage took 0.53-0.84 of the chunked levels' time
+ * order, so the tree is the same node for node (tests/test_opencl_large_stage.cpp), unless a
+ * reference budget makes leaves: the levels' and a subtree's (below) bound different sets of
+ * nodes, so on input whose splits cut most triangles they may make different budget leaves.
+ * On the 2-core PoCL CPU device the large stage took 0.53-0.84 of the chunked levels' time
  * (docs/large-stage.md).
  *
  *   kd_build_large_depth_first   per deep root: its subtree's records, small roots (and their
@@ -245,7 +247,8 @@ __kernel void kd_build_large_depth_first(
         if (axis == KDRAY_LEAF_AXIS) {
             const uint at = kd_arena_take(&a, KDRAY_DF_LEAF_REFS, n);
             if (a.full) break;
-            for (uint k = 0; k < n; ++k) leaf_refs[a.start[KDRAY_DF_LEAF_REFS] + at + k] = wt[b + k];
+            __global uint* leaf_out = leaf_refs + a.start[KDRAY_DF_LEAF_REFS] + at;
+            for (uint k = 0; k < n; ++k) leaf_out[k] = wt[b + k];
             rec[self] = kd_build_leaf(n, at);
             continue;
         }
@@ -286,9 +289,9 @@ __kernel void kd_build_large_depth_first(
 
 /* Item w's arenas (its counts, as kd_build_large_depth_first reported them) copied to the
  * build's stores: its records from base[KDRAY_DF_RECORDS * nodes + w] on (its root's to the
- * deep root's record id), its small roots, their references and its leaf references from their bases;
- * child ids, small root indices and reference offsets made global. Its KdLargeRegion lists the
- * records for the output stage. */
+ * deep root's record id), its small roots, their references and its leaf references from their
+ * bases; child ids, small root indices and reference offsets made global. Its KdLargeRegion
+ * lists the records for the output stage. */
 __kernel void kd_commit_depth_first(
     uint nodes, __global const uint* arena, __global const uint* counts,
     __global const uint* base, __global const KdLargeNode* deep_root,

@@ -27,8 +27,10 @@ KDRAY_INLINE void kd_empty_space_cuts(KdBox* box, KdBox tight, uint depth, uint 
             if (!(e > 0.0f)) continue;
             const float gap_lo = (kd_axis_of(tight.lo, a) - kd_axis_of(box->lo, a)) / e;
             const float gap_hi = (kd_axis_of(box->hi, a) - kd_axis_of(tight.hi, a)) / e;
-            if (gap_lo > best) best = gap_lo, axis = a, pos = kd_axis_of(tight.lo, a), keep_above = 1;
-            if (gap_hi > best) best = gap_hi, axis = a, pos = kd_axis_of(tight.hi, a), keep_above = 0;
+            if (gap_lo > best)
+                best = gap_lo, axis = a, pos = kd_axis_of(tight.lo, a), keep_above = 1;
+            if (gap_hi > best)
+                best = gap_hi, axis = a, pos = kd_axis_of(tight.hi, a), keep_above = 0;
         }
         if (axis == KDRAY_LEAF_AXIS) break;
         chain->code[cuts] = axis * 2 + keep_above;
@@ -65,7 +67,8 @@ KDRAY_HOT_INLINE uint kd_clip_side(KdBox b, __global const float* tri, const uin
     KdBox c = b, clipped;
     if (side == 0) c.hi = kd_with_axis(c.hi, axis, split);
     else c.lo = kd_with_axis(c.lo, axis, split);
-    const int entered = kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, side), &clipped);
+    const int entered =
+        kd_clip_triangle_bounds(tri, kd_child_box(node, axis, split, side), &clipped);
     if (entered) {
         c.lo = fmin(fmax(c.lo, clipped.lo), c.hi);
         c.hi = fmax(fmin(c.hi, clipped.hi), c.lo);
