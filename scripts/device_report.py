@@ -50,14 +50,19 @@ def scene_name(scene):
     return "/".join(path.replace("\\", "/").split("/")[-2:])
 
 
+def bench_files(folder, prefix):
+    """(case, data) of each bench/PREFIX-CASE.json the check wrote, by name."""
+    for path in sorted(glob.glob(os.path.join(folder, "bench", f"{prefix}-*.json"))):
+        yield os.path.basename(path)[len(prefix) + 1:-len(".json")], load(path)
+
+
 def build_rows(folder):
     rows = []
-    for path in sorted(glob.glob(os.path.join(folder, "bench", "build-*.json"))):
-        d = load(path)
+    for case, d in bench_files(folder, "build"):
         timings = d["timings_ms"]
         stage_sum = sum(timings.get(s, 0.0) for s in STAGES)
         rows.append({
-            "case": os.path.basename(path)[len("build-"):-len(".json")],
+            "case": case,
             "scene": scene_name(d["scene"]), "triangles": d["triangles"], "quality": d["quality"],
             "large_stage": d["large_stage"], "small_stage": d["small_stage"],
             "build_ms": d["build_ms"], "build_ms_samples": d.get("build_ms_samples", [d["build_ms"]]),
@@ -71,10 +76,9 @@ def build_rows(folder):
 
 def render_rows(folder):
     rows = []
-    for path in sorted(glob.glob(os.path.join(folder, "bench", "render-*.json"))):
-        d = load(path)
+    for case, d in bench_files(folder, "render"):
         frame = d["frames"][0]
-        rows.append({"case": os.path.basename(path)[len("render-"):-len(".json")],
+        rows.append({"case": case,
                      "quality": d["quality"], "size": [d["image"]["width"], d["image"]["height"]]
                      if isinstance(d.get("image"), dict) and "width" in d["image"] else None,
                      "build_ms": frame["build_ms"], "trace_ms": frame["trace_ms"],

@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <string>
+#include <utility>
 
 #include <CL/opencl.hpp>
 
@@ -32,22 +33,36 @@ void set_kernel_args(cl::Kernel& kernel, const Args&... args) {
     (kernel.setArg(index++, args), ...);
 }
 
-/// Enqueues `kernel` over `count` work-items (nothing when count is 0: OpenCL forbids empty
-/// launches). `args` are set first. Errors name the kernel.
-template <class... Args>
-void enqueue_kernel(ClDevice& device, cl::Kernel& kernel, std::size_t count, const Args&... args) {
+/// The one launch path of the functions below: nothing when count is 0 (OpenCL forbids empty
+/// launches), else `args` set, then `kernel` over the global and local sizes that `shape` gives
+/// (a std::pair); errors name the kernel and its count of `unit`.
+template <class Shape, class... Args>
+void enqueue_shaped(ClDevice& device, cl::Kernel& kernel, std::size_t count, const char* unit,
+                    Shape shape, const Args&... args) {
     if (count == 0) return;
     try {
         set_kernel_args(kernel, args...);
-        const std::size_t global =
-            (count + KDRAY_LAUNCH_GROUP - 1) / KDRAY_LAUNCH_GROUP * KDRAY_LAUNCH_GROUP;
-        const std::size_t group = device.group_1d(kernel, KDRAY_LAUNCH_GROUP);
-        device.launch(kernel, cl::NDRange(global), cl::NDRange(group));
+        const auto [global, local] = shape();
+        device.launch(kernel, cl::NDRange(global), cl::NDRange(local));
     } catch (const cl::Error& e) {
         throw_cl_error("running kernel " + kernel.getInfo<CL_KERNEL_FUNCTION_NAME>() + " over " +
-                           std::to_string(count) + " items",
+                           std::to_string(count) + " " + unit,
                        e.what(), e.err());
     }
+}
+
+/// Enqueues `kernel` over `count` work-items (nothing when count is 0). `args` are set first.
+/// Errors name the kernel.
+template <class... Args>
+void enqueue_kernel(ClDevice& device, cl::Kernel& kernel, std::size_t count, const Args&... args) {
+    enqueue_shaped(
+        device, kernel, count, "items",
+        [&] {
+            const std::size_t global =
+                (count + KDRAY_LAUNCH_GROUP - 1) / KDRAY_LAUNCH_GROUP * KDRAY_LAUNCH_GROUP;
+            return std::pair(global, device.group_1d(kernel, KDRAY_LAUNCH_GROUP));
+        },
+        args...);
 }
 
 /// Enqueues `kernel` over `count` work-items in work-groups of one: for kernels whose every item
@@ -57,15 +72,8 @@ void enqueue_kernel(ClDevice& device, cl::Kernel& kernel, std::size_t count, con
 template <class... Args>
 void enqueue_per_item(ClDevice& device, cl::Kernel& kernel, std::size_t count,
                       const Args&... args) {
-    if (count == 0) return;
-    try {
-        set_kernel_args(kernel, args...);
-        device.launch(kernel, cl::NDRange(count), cl::NDRange(1));
-    } catch (const cl::Error& e) {
-        throw_cl_error("running kernel " + kernel.getInfo<CL_KERNEL_FUNCTION_NAME>() + " over " +
-                           std::to_string(count) + " items",
-                       e.what(), e.err());
-    }
+    enqueue_shaped(
+        device, kernel, count, "items", [&] { return std::pair(count, std::size_t(1)); }, args...);
 }
 
 /// Enqueues `kernel` over `groups` work-groups of one KDRAY_REDUCE_CHUNK-sized chunk each: the
@@ -75,16 +83,13 @@ void enqueue_per_item(ClDevice& device, cl::Kernel& kernel, std::size_t count,
 template <class... Args>
 void enqueue_chunk_groups(ClDevice& device, cl::Kernel& kernel, std::size_t groups,
                           const Args&... args) {
-    if (groups == 0) return;
-    try {
-        set_kernel_args(kernel, args...);
-        const std::size_t group = device.group_1d(kernel, KDRAY_REDUCE_CHUNK);
-        device.launch(kernel, cl::NDRange(groups * group), cl::NDRange(group));
-    } catch (const cl::Error& e) {
-        throw_cl_error("running kernel " + kernel.getInfo<CL_KERNEL_FUNCTION_NAME>() + " over " +
-                           std::to_string(groups) + " work-groups",
-                       e.what(), e.err());
-    }
+    enqueue_shaped(
+        device, kernel, groups, "work-groups",
+        [&] {
+            const std::size_t group = device.group_1d(kernel, KDRAY_REDUCE_CHUNK);
+            return std::pair(groups * group, group);
+        },
+        args...);
 }
 
 }  // namespace kdray
