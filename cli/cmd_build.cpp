@@ -46,6 +46,7 @@ int run_build(const BuildCommand& command) {
     if (command.repeat > 1) {
         // The first build above was the warm-up (device opened, programs built, caches filled).
         for (int i = 0; i < command.repeat; ++i) {
+            builder->recycle(std::move(built.tree));
             built = builder->build(scene);
             samples.push_back(built.report.build_ms);
         }

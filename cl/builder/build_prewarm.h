@@ -4,8 +4,9 @@
 // makes them all afresh, and on a CPU device (PoCL) fresh buffers are fresh host pages: the
 // Kitchen's first build took 20k page faults against 0.1-4.5k for the builds after it, 99.6
 // against 63-83 ms. Sized from the triangle count alone (the load knows it before the device
-// opens), the few buffers that hold most of those pages are made and filled while the builder's
-// programs build, and left in the pool for the first build to take.
+// opens), the buffers that hold most of those pages are made and filled while the builder's
+// programs build, and left in the pool for the first build to take; so is the host memory the
+// tree is downloaded into (prewarm_host_tree).
 #pragma once
 
 #include <cstddef>
@@ -31,6 +32,11 @@ std::vector<ExpectedBuffer> expected_build_buffers(std::size_t triangles);
 /// the device writes them while the host builds programs) and gives them to its BufferPool.
 /// Returns the bytes made.
 std::size_t prewarm_build_buffers(ClDevice& device, std::size_t triangles);
+
+/// Host memory for the first build's downloaded tree (build_opencl's host_storage): vectors of
+/// the capacity a scene of `triangles` triangles needs, their pages written once, empty for
+/// small scenes.
+KdTree prewarm_host_tree(std::size_t triangles);
 
 /// A closed surface: a unit UV sphere of 2 * rings * segments triangles (the warm-up's scene, and
 /// a test's).

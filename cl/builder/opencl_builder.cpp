@@ -79,16 +79,24 @@ void prepare_opencl_builder(ClDevice& device, const BuildParams& params, std::si
 }
 
 KdTree build_opencl(ClDevice& device, const Scene& scene, const BuildParams& params,
-                    BuildReport* report, DeviceTree* on_device) {
-    return detail::build_opencl_with_limits(device, scene, params, {}, report, on_device);
+                    BuildReport* report, DeviceTree* on_device, KdTree* host_storage) {
+    return detail::build_opencl_with_limits(device, scene, params, {}, report, on_device,
+                                            host_storage);
 }
 
 KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
                                         const BuildParams& params, const SmallStageLimits& limits,
-                                        BuildReport* report, DeviceTree* on_device) {
+                                        BuildReport* report, DeviceTree* on_device,
+                                        KdTree* host_storage) {
     const auto start = std::chrono::steady_clock::now();
     const DeviceTraffic traffic_before = device.traffic();
     KdTree tree;
+    if (host_storage) {
+        tree.nodes = std::move(host_storage->nodes);
+        tree.leaf_indices = std::move(host_storage->leaf_indices);
+        tree.nodes.clear();
+        tree.leaf_indices.clear();
+    }
     tree.bounds = scene.bounds();
     tree.params = supported_params(params);
     tree.builder = "opencl";

@@ -26,6 +26,7 @@ class OpenClTreeBuilder final : public TreeBuilder {
     void prepare() override;
     void expect_triangles(std::size_t triangles) override { expected_triangles_ = triangles; }
     BuiltTree build(const Scene& scene) override;
+    void recycle(KdTree&& tree) override;
     std::string description() override;
     std::string quality() override;
     bool computes_on_host() override;
@@ -35,6 +36,8 @@ class OpenClTreeBuilder final : public TreeBuilder {
     BuildParams params_;
     std::size_t expected_triangles_ = 0;
     bool prewarmed_ = false;
+    /// Host memory for the next build's tree: prewarm_host_tree's, or a recycled tree's.
+    KdTree spare_;
 };
 
 }  // namespace kdray

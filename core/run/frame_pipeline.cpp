@@ -157,6 +157,7 @@ nlohmann::json FramePipeline::render_frame(const FrameJob& job, Output output,
                             {"max_cost", heatmap.max_cost},
                             {"cost_traversal", built.tree.params.costs.traversal},
                             {"cost_intersection", built.tree.params.costs.intersection}};
+    builder_.recycle(std::move(built.tree));
     return frame;
 }
 
