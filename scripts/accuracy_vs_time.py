@@ -360,6 +360,9 @@ def main():
     plan = Plan(args.quick, not args.quick and not args.no_shared
                 and os.path.isdir(os.path.join(SHARED, "scenes")))
     os.makedirs(args.out, exist_ok=True)
+    # Before the sweeps, which write their CSVs into the work tree as they finish: taken after,
+    # the record called every run's commit "-dirty".
+    record = run_record(kdray)
     started = time.time()
     log = lambda line: print(f"[{time.time() - started:6.1f} s] {line}", flush=True)  # noqa
     with tempfile.TemporaryDirectory(prefix="kdray-accuracy-") as tmp:
@@ -371,7 +374,6 @@ def main():
         write_csv(os.path.join(args.out, "image_accuracy.csv"), image_rows)
         robust_rows = sweep_robustness(kdray, plan, tmp, peer, log)
         write_csv(os.path.join(args.out, "robustness.csv"), robust_rows)
-    record = run_record(kdray)
     header = (f"Measured {record['date']} at {record['commit']} with `{record['command']}` in "
               f"{time.time() - started:.0f} s on {record['machine']}.")
     # The rows again with the run's record: what scripts/update_docs.py generates tables from.
