@@ -109,12 +109,18 @@ Scene uv_sphere(int rings, int segments) {
     return make_scene(std::move(tris), "sphere");
 }
 
-void warm_up_launches(ClDevice& device, const BuildParams& params) {
-    // 2 * 16 * 40 triangles: more than a large node holds, and more than a deep root of the
-    // depth-first large stage at T = 64 (large_depth_first.cpp: at least 16 T), so that the
+void warm_up_launches(ClDevice& device, const BuildParams& params, std::size_t triangles) {
+    // At least 2 * 16 * 40 triangles: more than a large node holds, and more than a deep root of
+    // the depth-first large stage at T = 64 (large_depth_first.cpp: at least 16 T), so that the
     // large stage's levels, its depth-first subtrees, the small stage and the output all run, yet
-    // a build of a few milliseconds once its kernels are loaded.
-    build_opencl(device, uv_sphere(16, 40), params);
+    // a build of a few milliseconds once its kernels are loaded. Up to the size at which
+    // prewarm_build_buffers takes over, a third more than the scene's: the sphere's arrays, left
+    // in the pool, then fit the scene's (a request takes a buffer of up to twice its size), so
+    // that a small scene's first build makes none (testdata/cornell, 2130 triangles: 1.37 times
+    // its warm build's time with the 1280-triangle sphere).
+    const std::size_t wanted = std::min(triangles, kPrewarmMinTriangles) * 4 / 3;
+    const int segments = int(std::max<std::size_t>(40, (wanted + 31) / 32));
+    build_opencl(device, uv_sphere(16, segments), params);
 }
 
 }  // namespace kdray::build_detail

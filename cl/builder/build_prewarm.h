@@ -45,6 +45,7 @@ Scene uv_sphere(int rings, int segments);
 /// Builds a small generated scene with `params`, so that each of the builder's kernels has been
 /// launched once: a first launch costs more than a later one (PoCL compiles or loads the kernel's
 /// work-group function then), about 1 ms of the CornellBox's 1.8 ms first build against 0.6 ms.
-void warm_up_launches(ClDevice& device, const BuildParams& params);
+/// Sized after `triangles`, the scene the first build will be given, while that is small.
+void warm_up_launches(ClDevice& device, const BuildParams& params, std::size_t triangles);
 
 }  // namespace kdray::build_detail

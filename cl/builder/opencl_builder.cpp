@@ -75,7 +75,7 @@ void prepare_opencl_builder(ClDevice& device, const BuildParams& params, std::si
     prewarm_build_buffers(device, triangles);
     builder_kernels(device, supported_params(params).large_split_bins);
     const ClPrimitives primitives(device);
-    if (triangles > 0) warm_up_launches(device, params);
+    if (triangles > 0) warm_up_launches(device, params, triangles);
 }
 
 KdTree build_opencl(ClDevice& device, const Scene& scene, const BuildParams& params,
