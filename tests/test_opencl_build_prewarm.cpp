@@ -106,10 +106,11 @@ TEST_CASE("opencl builder: a first build takes the buffers made ahead for its tr
         // taken, the build would make over 1/4 (with the masks and records alone, 47% and 52%).
         if (c.estimated) CHECK(ready_allocated < cold_allocated / 5);
         // Taken a little larger than asked for (up to twice, by another array when the sizes
-        // are off), they raise the peak: this sphere 13%, the floor 8%; a first `kdray build`'s
-        // device bytes per triangle rose 2% (Sponza) to 15% (the BART Robots) when the growing
-        // arrays joined the masks and records.
-        CHECK(ready.device_bytes <= cold.device_bytes * 113 / 100);
+        // are off), they raise the peak: this sphere 12.8%, the floor 7.8% on the PoCL CPU
+        // device; a first `kdray build`'s device bytes per triangle rose 2% (Sponza) to 15%
+        // (the BART Robots) when the growing arrays joined the masks and records. The bound is
+        // that 15%.
+        CHECK(ready.device_bytes <= cold.device_bytes * 115 / 100);
         test::check_same_tree(ready_tree, cold_tree, scene, 28);
     }
 }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <new>
 
 #include "cl/runtime/cl_error.h"
 
@@ -15,17 +16,20 @@ constexpr double kPi = 3.14159265358979323846;
 /// Below this many triangles a build's arrays are a few hundred pages: not worth a buffer each.
 constexpr std::size_t kPrewarmMinTriangles = 4096;
 
-/// Bytes per triangle of each buffer: above the most a build asked for on the benchmark scenes
-/// (`kdray build`, default quality; Kitchen, Robots, bunny, dragon res2 and res4, teapot), and
-/// under twice the least, so that each scene's request fits (BufferPool::take keeps a buffer
-/// for requests of half its size and more). Asked for, per triangle: masks 200-230 (128 bytes
-/// per small-root reference), first-pass small node records 255-294 (10 KdSmallNode per
-/// reference and root), the triangles (36) and their boxes (24) exactly: with 500-600 bytes of
-/// the 800-900 per triangle that a first build makes afresh. Left out, since a request of
-/// another array takes them first when they are made ahead (the pool matches by size): the
-/// child boxes (48-61), output nodes (50-66) and leaf indices (15-22), which on the dragon raised
-/// the peak by 13% and the page faults too; the small roots' growing arrays and the large
-/// stage's per-level ones, whose sizes follow the splits.
+/// Bytes per triangle of each buffer, most valuable first (prewarm_build_buffers stops at the
+/// pool's capacity): above the most a build asked for on the benchmark scenes (`kdray build` at
+/// high and low; Kitchen, Robots, bunny, Sponza, dragon res2 and res4, teapot), and under twice
+/// the least, so that each scene's request fits (BufferPool::take keeps a buffer for requests of
+/// half its size and more). Asked for, per triangle: masks 207-250 (128 bytes per small-root
+/// reference), first-pass small node records 255-317 (10 KdSmallNode per reference and root),
+/// the triangles (36) and their boxes (24) exactly, then the arrays that grow with the splits
+/// (below). A first build then makes about 7% of its arrays afresh (tests/
+/// test_opencl_build_prewarm.cpp): the BART Robots' large stage took 74 page faults, against
+/// 1,766 with the masks, records, triangles and arenas alone. Left out, since a request of
+/// another array takes them first when they are made ahead (the pool matches by size): the child
+/// boxes (48-61), output nodes (50-66) and leaf indices (15-22), which on the dragon raised the
+/// peak by 13% and the page faults too. Buffers taken a little larger than asked for raise a
+/// first build's peak: 2% (Sponza) to 15% (the Robots) for the growing arrays.
 struct PerTriangle {
     const char* what;
     std::size_t bytes;
@@ -65,6 +69,8 @@ std::vector<ExpectedBuffer> expected_build_buffers(std::size_t triangles) {
 std::size_t prewarm_build_buffers(ClDevice& device, std::size_t triangles) {
     std::size_t made = 0;
     for (const ExpectedBuffer& expected : expected_build_buffers(triangles)) {
+        // A full pool releases its oldest buffers, the most valuable of these: stop before.
+        if (made + expected.bytes > device.buffer_pool().capacity()) break;
         // A buffer the device could not make is one the build will fail to make too, with its
         // own error: here it is only left out.
         if (expected.bytes > device.info().max_alloc_bytes) continue;
@@ -87,8 +93,13 @@ KdTree prewarm_host_tree(std::size_t triangles) {
     // Per triangle, above the most the benchmark scenes' trees hold at high quality: 8.2 nodes
     // (the bunny; 5.4-6.9 elsewhere) and 5.6 leaf references (the bunny; 3.7-5.3 elsewhere).
     // resize writes every page; clear keeps them.
-    tree.nodes.resize(10 * triangles);
-    tree.leaf_indices.resize(7 * triangles);
+    try {
+        tree.nodes.resize(10 * triangles);
+        tree.leaf_indices.resize(7 * triangles);
+    } catch (const std::bad_alloc&) {
+        // Only a head start: the build makes its own and says so if the host lacks memory.
+        return KdTree{};
+    }
     tree.nodes.clear();
     tree.leaf_indices.clear();
     return tree;
@@ -118,7 +129,7 @@ void warm_up_launches(ClDevice& device, const BuildParams& params, std::size_t t
     // in the pool, then fit the scene's (a request takes a buffer of up to twice its size), so
     // that a small scene's first build makes none (testdata/cornell, 2130 triangles: 1.37 times
     // its warm build's time with the 1280-triangle sphere).
-    const std::size_t wanted = std::min(triangles, kPrewarmMinTriangles) * 4 / 3;
+    const std::size_t wanted = triangles < kPrewarmMinTriangles ? triangles * 4 / 3 : 0;
     const int segments = int(std::max<std::size_t>(40, (wanted + 31) / 32));
     build_opencl(device, uv_sphere(16, segments), params);
 }

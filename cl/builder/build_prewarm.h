@@ -5,8 +5,9 @@
 // Kitchen's first build took 20k page faults against 0.1-4.5k for the builds after it, 99.6
 // against 63-83 ms. Sized from the triangle count alone (the load knows it before the device
 // opens), the buffers that hold most of those pages are made and filled while the builder's
-// programs build, and left in the pool for the first build to take; so is the host memory the
-// tree is downloaded into (prewarm_host_tree).
+// programs build, and left in the pool for the first build to take. The host memory the tree is
+// downloaded into is made and written before that (prewarm_host_tree), and OpenClTreeBuilder
+// holds it for the first build.
 #pragma once
 
 #include <cstddef>

@@ -17,10 +17,7 @@ void OpenClTreeBuilder::prepare() {
 }
 
 void OpenClTreeBuilder::recycle(KdTree&& tree) {
-    // The larger memory is kept: a sequence's frames differ a little in size.
-    if (tree.nodes.capacity() + tree.leaf_indices.capacity() >
-        spare_.nodes.capacity() + spare_.leaf_indices.capacity())
-        spare_ = std::move(tree);
+    spare_ = std::move(tree);
 }
 
 BuiltTree OpenClTreeBuilder::build(const Scene& scene) {
@@ -28,6 +25,7 @@ BuiltTree OpenClTreeBuilder::build(const Scene& scene) {
     auto on_device = std::make_shared<OpenClResidentTree>();
     built.tree = build_opencl(session_.device(), scene, params_, &built.report, &on_device->buffers,
                               &spare_);
+    // Its vectors are the tree's now; the rest of it (params, builder) is stale.
     spare_ = KdTree{};
     built.on_device = std::move(on_device);
     return built;

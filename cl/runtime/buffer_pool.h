@@ -38,6 +38,8 @@ class BufferPool {
     void clear();
 
     std::size_t bytes() const { return bytes_; }
+    /// The most bytes the pool keeps.
+    std::size_t capacity() const { return capacity_; }
     bool empty() const { return kept_.empty(); }
 
   private:
