@@ -85,14 +85,19 @@ __kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const f
 /* The masks carry boxes clipped to the small root (or to a re-clipping ancestor), not to the node,
  * so a triangle whose box straddles a split may still miss one child inside this node (a long
  * diagonal triangle past the corner of a deep node). A straddling triangle whose plane misses a
- * child's box leaves that child. */
+ * child's box leaves that child; only those that reach past the node on another axis are tested
+ * (kd_straddler_may_miss). */
 KDRAY_INLINE void kd_drop_missed_triangles(ulong* below, ulong* above, KdBox box, uint axis,
-                                           float split, uint start, const KdClippedTable* table,
+                                           float split, uint start, __global const float* ref_box,
+                                           const KdClippedTable* table,
                                            __global const uint* ref_tri,
                                            __global const float* triangles) {
     for (ulong rest = *below & *above; rest != 0; rest &= rest - 1) {
         const ulong bit = rest & (0ul - rest);
         const uint j = kd_lowest_bit(rest);
+        const KdBox ref_bounds = table ? kd_lanes_box(vload8(j, table->candidates))
+                                       : kd_load_box(ref_box, start + j);
+        if (!kd_straddler_may_miss(ref_bounds, box, axis)) continue;
         /* A re-clipped node's table holds its triangles' planes: no fetch from the triangles. */
         const KdTrianglePlane plane =
             table ? table->planes[j]
@@ -214,7 +219,7 @@ __kernel void kd_build_small_subtrees(
         const float split = kd_split_at_candidate(pos, below, above, node.mask, node.box, k,
                                                   &children[0], &children[1]);
         kd_drop_missed_triangles(&children[0], &children[1], node.box, axis, split, start,
-                                 node_table, ref_tri, triangles);
+                                 ref_box, node_table, ref_tri, triangles);
         if (at < budget) out[at] = kd_small_inner(axis, split);
         KdPendingNode pending;
         pending.box = kd_child_box(node.box, axis, split, 1);

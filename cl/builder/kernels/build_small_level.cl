@@ -256,7 +256,10 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
     if (lid < 4) scratch[3 + lid] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
     const ulong straddle = children[0] & children[1];
-    if ((straddle >> lid) & 1ul) {
+    if (((straddle >> lid) & 1ul) &&
+        kd_straddler_may_miss(on_table ? kd_lanes_box(vload8(lid, table.candidates))
+                                       : kd_load_box(ref_box, start + lid),
+                              box, axis)) {
         const KdTrianglePlane plane =
             on_table ? table.planes[lid]
                      : kd_triangle_plane(triangles +
