@@ -251,8 +251,8 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
     ulong children[2];
     const float split =
         kd_split_at_candidate(pos, below, above, mask, box, k, &children[0], &children[1]);
-    /* kd_drop_missed_triangles, a straddling triangle per work-item: one whose plane misses a
-     * child's box leaves that child. */
+    /* kd_drop_missed_triangles, a straddling triangle per work-item (those kd_straddler_may_miss
+     * picks): one whose plane misses a child's box leaves that child. */
     if (lid < 4) scratch[3 + lid] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
     const ulong straddle = children[0] & children[1];

@@ -39,14 +39,15 @@ KDRAY_INLINE KdBox kd_lanes_box(float8 c) {
 /* Whether a triangle that straddles a node's split (in both children's masks) is worth the plane
  * test that may drop it from one child (kd_drop_missed_triangles): only when its box b (clipped to
  * the small root or to a re-clipping ancestor, not to the node) reaches past the node's box on an
- * axis other than the split's. Were b the exact bounds of the triangle's clipped part, inside the
- * node's slab on both of those axes that convex part would have points on both sides of the split
- * inside the node, meeting both children, so the test could drop nothing. Clipped boxes are
- * intersections of such bounds, a little larger at times, so the rule keeps a few triangles the
- * test would have dropped (Kitchen at high: 2 nodes of 690,461 more; no tree at low changed on the
- * Kitchen, Robots, dragon res2 or Sponza); a kept triangle costs a ray a wasted test, never a
- * missed hit. Testing every straddler, its triangle fetched, took a fifth of the small stage at
- * low (dragon res2: 31 -> 27 ms with this rule, 22 ms with no test at all). */
+ * axis other than the split's. A split that makes straddlers lies strictly inside the node (one on
+ * its face makes none, kd_candidate_children). Were b the exact bounds of the triangle's clipped
+ * part, inside the node's slab on both of those axes that convex part would have points on both
+ * sides of the split inside the node, meeting both children, so the test could drop nothing.
+ * Clipped boxes are intersections of such bounds, a little larger at times, so the rule keeps a
+ * few triangles the test would have dropped (Kitchen at high: 2 nodes of 690,461 more; no tree at
+ * low changed on the Kitchen, Robots, dragon res2 or Sponza); a kept triangle costs a ray a wasted
+ * test, never a missed hit. Testing every straddler, its triangle fetched, took over a quarter of
+ * the small stage at low (dragon res2: 31 ms; 27 ms with this rule, 22 ms with no test at all). */
 KDRAY_INLINE int kd_straddler_may_miss(KdBox b, KdBox node, uint axis) {
     const int3 past = (b.lo < node.lo) | (b.hi > node.hi);
     return (axis != 0 && past.x) || (axis != 1 && past.y) || (axis != 2 && past.z);
