@@ -47,7 +47,7 @@ void enqueue_chunk_pass(BuildContext& ctx, cl::Kernel& per_chunk, cl::Kernel& pe
     if (ctx.element_parallel_large)
         enqueue_chunk_groups(ctx.device, per_reference, chunks, args...);
     else
-        enqueue_kernel(ctx.device, per_chunk, chunks, args...);
+        enqueue_chunk_items(ctx.device, per_chunk, chunks, args...);
 }
 
 /// What one level decides about its nodes and references; it lives for that level only.
@@ -107,10 +107,10 @@ void decide_splits(BuildContext& ctx, const LargeLevel& level, bool force_leaf, 
     // node and bin value), so that the split reads one set per node.
     const bool bins_by_node = per_reference && bins > 0 && !force_leaf;
     if (bins > 0 && !force_leaf && !per_reference)
-        enqueue_kernel(ctx.device, ctx.kernels.bin_large, chunks, level.ref_box.buffer(),
-                       level.ref_start.buffer(), level.ref_count.buffer(),
-                       level.chunk_start.buffer(), nodes, chunks, level.node.buffer(),
-                       s.tight_box.buffer(), s.chunk_bins.buffer());
+        enqueue_chunk_items(ctx.device, ctx.kernels.bin_large, chunks, level.ref_box.buffer(),
+                            level.ref_start.buffer(), level.ref_count.buffer(),
+                            level.chunk_start.buffer(), nodes, chunks, level.node.buffer(),
+                            s.tight_box.buffer(), s.chunk_bins.buffer());
     if (bins_by_node) {
         enqueue_chunk_groups(ctx.device, ctx.kernels.bin_large_groups, chunks,
                              level.ref_box.buffer(), level.ref_start.buffer(),
