@@ -1,8 +1,10 @@
 // launch.h — one-dimensional kernel launches with kdray's error context. Every kernel of the
 // builder takes its element count as an argument and returns early past it, so the global size is
-// rounded up to a multiple of KDRAY_LAUNCH_GROUP (core/device/kd_build_shared.h, where the
-// per-level small stage's kernel reads it too) and every launch uses that one work-group size
-// (the chunked large stage's passes on CPUs one of their own: enqueue_chunk_items).
+// rounded up to a multiple of the launch's work-group size, which is fixed per kernel:
+// KDRAY_LAUNCH_GROUP (core/device/kd_build_shared.h, where the per-level small stage's kernel
+// reads it too) for most (enqueue_kernel), one for the depth-first subtrees (enqueue_per_item),
+// up to KDRAY_REDUCE_CHUNK for the element-parallel large stage (enqueue_chunk_groups), and 16 for
+// the chunked large stage's passes on CPU devices (enqueue_chunk_items).
 //
 // Why a fixed work-group size: PoCL compiles a separate work-group function for every local size
 // it meets, and left to itself it picks the local size from the global size, which changes at
@@ -10,8 +12,8 @@
 // variant (every later run): 8% of a kitchen build's profile sat in ld.so's symbol lookup. With
 // one size each kernel has one variant. 64 is a warp/wavefront multiple on GPUs. A device or
 // kernel that allows less gets the largest power of two it allows (work_group.h), which still
-// divides the rounded global size; the limits are queried at each launch (a few getters, next to
-// an enqueue) so that no stale cache can outlive a kernel.
+// divides the rounded global size; ClDevice::group_1d asks the device once per kernel and
+// preferred size, and keeps the kernel with the answer.
 #pragma once
 
 #include <cstddef>
@@ -71,14 +73,16 @@ void enqueue_kernel(ClDevice& device, cl::Kernel& kernel, std::size_t count, con
 /// kCpuChunkGroup: with KDRAY_LAUNCH_GROUP a level's few hundred chunks made a few work-groups,
 /// which the device's compute units shared unevenly (the Kitchen's root level: 448 chunks in 7
 /// groups, 4 for one of 2 cores and 3 for the other; in groups of 16, its `low` build's large
-/// stage took 14.0 ms instead of 15.2, the median of 3 alternated runs of 9 builds). A GPU keeps
-/// KDRAY_LAUNCH_GROUP, a warp multiple. Either way one size per kernel, as above.
+/// stage took 14.0 ms instead of 15.2, the median of 3 alternated runs of 9 builds). Other devices
+/// keep KDRAY_LAUNCH_GROUP, a warp multiple on GPUs. Either way one size per kernel, as above.
 inline constexpr std::size_t kCpuChunkGroup = 16;
+static_assert((kCpuChunkGroup & (kCpuChunkGroup - 1)) == 0,
+              "a smaller group that a kernel allows must divide the rounded global size");
 
 template <class... Args>
 void enqueue_chunk_items(ClDevice& device, cl::Kernel& kernel, std::size_t count,
                          const Args&... args) {
-    const std::size_t group = device.is_gpu() ? KDRAY_LAUNCH_GROUP : kCpuChunkGroup;
+    const std::size_t group = device.is_cpu() ? kCpuChunkGroup : KDRAY_LAUNCH_GROUP;
     enqueue_shaped(
         device, kernel, count, "chunks",
         [&] {

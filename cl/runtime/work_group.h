@@ -1,10 +1,11 @@
 // work_group.h — the work-group shape of a launch, chosen from what the device and the compiled
 // kernel report instead of assumed: kdray prefers 64 work-items for the builder's 1-D kernels
-// (KDRAY_LAUNCH_GROUP, launch.h), 8x8 pixel tiles for the render kernels and 4 packet tiles,
-// but a GPU may compile a kernel that uses many registers for smaller groups
-// (CL_KERNEL_WORK_GROUP_SIZE), and Oclgrind can be told any limit (--max-wgsize). Where a kernel
-// allows a smaller group, a smaller one is chosen; where it cannot (reqd_work_group_size, local
-// memory beyond the device's), the error names the kernel and the limit.
+// (KDRAY_LAUNCH_GROUP; launch.h lists the few that prefer other sizes), 8x8 pixel tiles for the
+// render kernels and 4 packet tiles, but a GPU may compile a kernel that uses many registers for
+// smaller groups (CL_KERNEL_WORK_GROUP_SIZE), and Oclgrind can be told any limit (--max-wgsize).
+// Where a kernel allows a smaller group, a smaller one is chosen; where it cannot
+// (reqd_work_group_size, local memory beyond the device's), the error names the kernel and the
+// limit.
 #pragma once
 
 #include <cstddef>
