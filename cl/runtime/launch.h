@@ -54,18 +54,20 @@ void enqueue_shaped(ClDevice& device, cl::Kernel& kernel, std::size_t count, con
     }
 }
 
+/// The global and local sizes of `count` work-items in work-groups of `group` (a power of two, or
+/// whatever smaller power of two the kernel allows, which still divides the rounded count).
+inline std::pair<std::size_t, std::size_t> groups_of(ClDevice& device, cl::Kernel& kernel,
+                                                     std::size_t count, std::size_t group) {
+    return {(count + group - 1) / group * group, device.group_1d(kernel, group)};
+}
+
 /// Enqueues `kernel` over `count` work-items (nothing when count is 0). `args` are set first.
 /// Errors name the kernel.
 template <class... Args>
 void enqueue_kernel(ClDevice& device, cl::Kernel& kernel, std::size_t count, const Args&... args) {
     enqueue_shaped(
         device, kernel, count, "items",
-        [&] {
-            const std::size_t global =
-                (count + KDRAY_LAUNCH_GROUP - 1) / KDRAY_LAUNCH_GROUP * KDRAY_LAUNCH_GROUP;
-            return std::pair(global, device.group_1d(kernel, KDRAY_LAUNCH_GROUP));
-        },
-        args...);
+        [&] { return groups_of(device, kernel, count, KDRAY_LAUNCH_GROUP); }, args...);
 }
 
 /// Enqueues `kernel` over `count` work-items that each walk a chunk of up to KDRAY_REDUCE_CHUNK
@@ -84,11 +86,7 @@ void enqueue_chunk_items(ClDevice& device, cl::Kernel& kernel, std::size_t count
                          const Args&... args) {
     const std::size_t group = device.is_cpu() ? kCpuChunkGroup : KDRAY_LAUNCH_GROUP;
     enqueue_shaped(
-        device, kernel, count, "chunks",
-        [&] {
-            const std::size_t global = (count + group - 1) / group * group;
-            return std::pair(global, device.group_1d(kernel, group));
-        },
+        device, kernel, count, "chunks", [&] { return groups_of(device, kernel, count, group); },
         args...);
 }
 
