@@ -15,7 +15,7 @@ nlohmann::json list_devices_json() {
         return nlohmann::json::array({{{"error", e.what()}}});
     }
     nlohmann::json out = nlohmann::json::array();
-    for (const ClDeviceInfo& d : devices)
+    for (const ClDeviceInfo& d : devices) {
         out.push_back({{"index", d.index},
                        {"name", d.name},
                        {"platform", d.platform},
@@ -25,6 +25,8 @@ nlohmann::json list_devices_json() {
                        {"compute_units", d.compute_units},
                        {"global_mem_bytes", d.global_mem_bytes},
                        {"max_alloc_bytes", d.max_alloc_bytes}});
+        if (d.type == "CPU") out.back()["threads_pinned"] = d.threads_pinned;
+    }
     return out;
 }
 

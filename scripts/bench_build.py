@@ -16,7 +16,9 @@ Writes docs/bench-build.md, .csv and .json (or --out) with the commit, machine a
 
 --cold-only measures only kdray's cold and warm builds, in --cold rounds of one fresh single
 build and one `build --repeat` process in turn (so that a slow spell of a shared machine hits
-both), and writes OUT.json and OUT.md: the medians, the ratio cold / warm, and per stage.
+both), and writes OUT.json and OUT.md: the medians, the ratio cold / warm, and per stage. Where
+kdray pins PoCL's threads, each scene's rounds are repeated with them placed by the OS
+(POCL_AFFINITY=0), for what the pinning changes.
 """
 import argparse
 import json
@@ -35,14 +37,14 @@ from bench_common import (ROOT, benchmark_scenes, build_peer, median, run_json, 
 PROCESS_KEYS = ("load_ms", "prepare_ms", "compile_ms", "user_ms", "sys_ms", "minor_faults")
 
 
-def cold_build(kdray, obj):
+def cold_build(kdray, obj, env=None):
     """One fresh `kdray build OBJ --json`: its report, with the process's wall time (wall_ms),
     CPU time (user_ms, sys_ms) and minor page faults, which a shared machine's load disturbs
     less than the times."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     result = subprocess.run([kdray, "build", obj, "--json", "--builder", "opencl"],
-                            capture_output=True, text=True)
+                            capture_output=True, text=True, env=env)
     wall_ms = (time.perf_counter() - start) * 1e3
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if result.returncode != 0:
@@ -59,13 +61,13 @@ def stage_medians(reports):
     return {s: median([r["timings_ms"][s] for r in reports]) for s in stages}
 
 
-def cold_and_warm(kdray, obj, rounds, repeat):
+def cold_and_warm(kdray, obj, rounds, repeat, env=None):
     """Rounds of one cold single build and one warm `build --repeat` process in turn."""
     cold, warm, warm_reports = [], [], []
     for _ in range(rounds):
-        cold.append(cold_build(kdray, obj))
+        cold.append(cold_build(kdray, obj, env))
         report = run_json([kdray, "build", obj, "--json", "--builder", "opencl",
-                           "--repeat", str(repeat)])
+                           "--repeat", str(repeat)], env)
         warm.extend(report["build_ms_samples"])
         warm_reports.append(report)
     out = {"triangles": cold[0]["triangles"],
@@ -90,8 +92,16 @@ def selected(name, scenes):
     return not scenes or any(part in name for part in scenes.split(","))
 
 
+def threads_pinned(kdray):
+    """Whether kdray runs on a CPU device whose driver threads it pinned (`kdray stats`)."""
+    devices = run_json([kdray, "stats", "--json"]).get("devices", [])
+    return any(d.get("threads_pinned") for d in devices)
+
+
 def cold_only(args):
-    """Writes OUT.json and OUT.md: kdray's cold and warm builds of each scene."""
+    """Writes OUT.json and OUT.md: kdray's cold and warm builds of each scene; where kdray pins
+    PoCL's threads, the same again with them placed by the OS (POCL_AFFINITY=0), in turn."""
+    os_placed_env = dict(os.environ, POCL_AFFINITY="0") if threads_pinned(args.kdray) else None
     scenes = {}
     for name, obj, _ in benchmark_scenes():
         if not selected(name, args.scenes):
@@ -100,29 +110,45 @@ def cold_only(args):
         print(f"{name}: cold {scenes[name]['cold_build_ms']:.1f} ms (process "
               f"{scenes[name]['cold_process_ms']:.0f} ms), warm "
               f"{scenes[name]['warm_build_ms']:.1f} ms", file=sys.stderr)
+        if os_placed_env:
+            placed = cold_and_warm(args.kdray, obj, args.cold, args.repeat, os_placed_env)
+            scenes[name]["os_placed"] = {k: placed[k] for k in (
+                "cold_build_ms", "warm_build_ms", "cold_over_warm", "cold_samples",
+                "warm_samples")}
     result = {**run_record(args.kdray), "kdray": args.kdray, "rounds": args.cold,
               "repeat": args.repeat, "pocl_cache_dir": os.environ.get("POCL_CACHE_DIR", ""),
-              "scenes": scenes}
+              "threads_pinned": bool(os_placed_env), "scenes": scenes}
     os.makedirs(os.path.dirname(args.out), exist_ok=True)
     write_json(args.out + ".json", result)
+    placed_columns = os_placed_env is not None
     lines = ["# Cold and warm builds", "",
              f"Run {result['date']} on {result['machine']}.",
              f"{args.cold} rounds, each one fresh `kdray build SCENE --json` (cold: its build_ms, "
              f"and the process's wall time) and one `kdray build --repeat {args.repeat}` process "
-             "(warm: its builds after the warm-up); medians. PoCL's kernel cache was warm.", "",
+             "(warm: its builds after the warm-up); medians. PoCL's kernel cache was warm."
+             + (" The last columns: the same rounds with PoCL's threads placed by the OS "
+                "(POCL_AFFINITY=0) rather than pinned by kdray (cl/runtime/driver_environment.h)."
+                if placed_columns else ""), "",
              "| scene | triangles | cold build ms | warm build ms | cold / warm "
              "| cold process ms | its load, prepare ms | its CPU user, sys ms "
-             "| its page faults |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "| its page faults |" + (" OS-placed threads: cold, warm build ms | cold / warm |"
+                                      if placed_columns else ""),
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|" + ("---:|---:|"
+                                                                 if placed_columns else "")]
 
     def pair(r, keys):
         return ", ".join(f"{r[f'cold_{k}']:.0f}" for k in keys if f"cold_{k}" in r)
 
     for name, r in scenes.items():
-        lines.append(f"| {name} | {r['triangles']} | {r['cold_build_ms']:.1f} | "
-                     f"{r['warm_build_ms']:.1f} | {r['cold_over_warm']:.2f} | "
-                     f"{r['cold_process_ms']:.0f} | {pair(r, ('load_ms', 'prepare_ms'))} | "
-                     f"{pair(r, ('user_ms', 'sys_ms'))} | {pair(r, ('minor_faults',))} |")
+        line = (f"| {name} | {r['triangles']} | {r['cold_build_ms']:.1f} | "
+                f"{r['warm_build_ms']:.1f} | {r['cold_over_warm']:.2f} | "
+                f"{r['cold_process_ms']:.0f} | {pair(r, ('load_ms', 'prepare_ms'))} | "
+                f"{pair(r, ('user_ms', 'sys_ms'))} | {pair(r, ('minor_faults',))} |")
+        if "os_placed" in r:
+            p = r["os_placed"]
+            line += (f" {p['cold_build_ms']:.1f}, {p['warm_build_ms']:.1f} | "
+                     f"{p['cold_over_warm']:.2f} |")
+        lines.append(line)
     with open(args.out + ".md", "w") as f:
         f.write("\n".join(lines) + "\n")
     print("\n".join(lines))

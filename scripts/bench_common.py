@@ -36,9 +36,9 @@ def benchmark_scenes(include_shared=True):
     return [s for s in found if os.path.isfile(s[1])]
 
 
-def run_json(command):
+def run_json(command, env=None):
     """Runs a command that prints one JSON object; raises with its stderr on failure."""
-    result = subprocess.run(command, capture_output=True, text=True)
+    result = subprocess.run(command, capture_output=True, text=True, env=env)
     if result.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed: {result.stderr.strip()}")
     return json.loads(result.stdout.strip().splitlines()[-1] if command[0].endswith("embree_ref")
@@ -68,8 +68,9 @@ def machine_description(kdray):
     devices = []
     try:
         info = run_json([kdray, "stats", "--json"])
-        devices = [f"{d.get('name')} ({d.get('version')})" for d in info.get("devices", [])
-                   if "name" in d]
+        devices = [f"{d.get('name')} ({d.get('version')}"
+                   f"{'; its threads pinned' if d.get('threads_pinned') else ''})"
+                   for d in info.get("devices", []) if "name" in d]
     except (RuntimeError, json.JSONDecodeError):
         pass
     return (f"{cpu}, {os.cpu_count()} cores; OpenCL: {', '.join(devices) or 'none'}; "

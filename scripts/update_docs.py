@@ -156,11 +156,21 @@ def performance():
 
 def cold_build():
     data = load("cold-build", rows_key=None)
-    rows = [[name, ms(r["cold_build_ms"]), ms(r["warm_build_ms"]), f"{r['cold_over_warm']:.2f}",
-             f"{r['cold_minor_faults']:.0f}" if "cold_minor_faults" in r else ""]
-            for name, r in data.value["scenes"].items()]
-    return table(["scene", "cold build ms", "warm build ms", "cold / warm build time",
-                  "cold process's page faults"], rows, data)
+    scenes = data.value["scenes"]
+    placed = all("os_placed" in r for r in scenes.values())
+    rows = []
+    for name, r in scenes.items():
+        row = [name, ms(r["cold_build_ms"]), ms(r["warm_build_ms"]), f"{r['cold_over_warm']:.2f}",
+               f"{r['cold_minor_faults']:.0f}" if "cold_minor_faults" in r else ""]
+        if placed:
+            p = r["os_placed"]
+            row += [ms(p["warm_build_ms"]), f"{p['cold_over_warm']:.2f}"]
+        rows.append(row)
+    header = ["scene", "cold build ms", "warm build ms", "cold / warm build time",
+              "cold process's page faults"]
+    if placed:
+        header += ["warm build ms, threads placed by the OS", "cold / warm, placed by the OS"]
+    return table(header, rows, data)
 
 
 def quality_defaults():
