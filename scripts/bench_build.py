@@ -17,7 +17,7 @@ Writes docs/bench-build.md, .csv and .json (or --out) with the commit, machine a
 --cold-only measures only kdray's cold and warm builds, in --cold rounds of one fresh single
 build and one `build --repeat` process in turn (so that a slow spell of a shared machine hits
 both), and writes OUT.json and OUT.md: the medians, the ratio cold / warm, and per stage. Where
-kdray pins PoCL's threads, each scene's rounds are repeated with them placed by the OS
+kdray pins PoCL's threads, every round also runs both processes with them placed by the OS
 (POCL_AFFINITY=0), for what the pinning changes.
 """
 import argparse
@@ -61,15 +61,22 @@ def stage_medians(reports):
     return {s: median([r["timings_ms"][s] for r in reports]) for s in stages}
 
 
-def cold_and_warm(kdray, obj, rounds, repeat, env=None):
-    """Rounds of one cold single build and one warm `build --repeat` process in turn."""
-    cold, warm, warm_reports = [], [], []
+def cold_and_warm(kdray, obj, rounds, repeat, envs=(None,)):
+    """Rounds of one cold single build and one warm `build --repeat` process in turn, each round
+    once per environment of `envs` (None: this one), so that a slow spell of a shared machine hits
+    every one; a summary per environment, in their order."""
+    samples = [([], [], []) for _ in envs]  # per environment: cold reports, warm times, reports
     for _ in range(rounds):
-        cold.append(cold_build(kdray, obj, env))
-        report = run_json([kdray, "build", obj, "--json", "--builder", "opencl",
-                           "--repeat", str(repeat)], env)
-        warm.extend(report["build_ms_samples"])
-        warm_reports.append(report)
+        for env, (cold, warm, warm_reports) in zip(envs, samples):
+            cold.append(cold_build(kdray, obj, env))
+            report = run_json([kdray, "build", obj, "--json", "--builder", "opencl",
+                               "--repeat", str(repeat)], env)
+            warm.extend(report["build_ms_samples"])
+            warm_reports.append(report)
+    return [summarise_cold_and_warm(*s) for s in samples]
+
+
+def summarise_cold_and_warm(cold, warm, warm_reports):
     out = {"triangles": cold[0]["triangles"],
            "cold_build_ms": median([r["build_ms"] for r in cold]),
            "cold_process_ms": median([r["wall_ms"] for r in cold]),
@@ -92,42 +99,48 @@ def selected(name, scenes):
     return not scenes or any(part in name for part in scenes.split(","))
 
 
-def threads_pinned(kdray):
-    """Whether kdray runs on a CPU device whose driver threads it pinned (`kdray stats`)."""
+def default_device_pins_threads(kdray):
+    """Whether the device `kdray build` picks (the first GPU, else the first device) is a CPU
+    device whose driver threads kdray had pinned (`kdray stats`)."""
     devices = run_json([kdray, "stats", "--json"]).get("devices", [])
-    return any(d.get("threads_pinned") for d in devices)
+    if not devices or any(d.get("type") == "GPU" for d in devices):
+        return False
+    return bool(devices[0].get("threads_pinned"))
 
 
 def cold_only(args):
     """Writes OUT.json and OUT.md: kdray's cold and warm builds of each scene; where kdray pins
-    PoCL's threads, the same again with them placed by the OS (POCL_AFFINITY=0), in turn."""
-    os_placed_env = dict(os.environ, POCL_AFFINITY="0") if threads_pinned(args.kdray) else None
+    PoCL's threads, also with them placed by the OS (POCL_AFFINITY=0), round by round."""
+    envs = [None]
+    if default_device_pins_threads(args.kdray):
+        envs.append(dict(os.environ, POCL_AFFINITY="0"))
     scenes = {}
     for name, obj, _ in benchmark_scenes():
         if not selected(name, args.scenes):
             continue
-        scenes[name] = cold_and_warm(args.kdray, obj, args.cold, args.repeat)
+        summaries = cold_and_warm(args.kdray, obj, args.cold, args.repeat, envs)
+        scenes[name] = summaries[0]
         print(f"{name}: cold {scenes[name]['cold_build_ms']:.1f} ms (process "
               f"{scenes[name]['cold_process_ms']:.0f} ms), warm "
               f"{scenes[name]['warm_build_ms']:.1f} ms", file=sys.stderr)
-        if os_placed_env:
-            placed = cold_and_warm(args.kdray, obj, args.cold, args.repeat, os_placed_env)
-            scenes[name]["os_placed"] = {k: placed[k] for k in (
+        if len(summaries) > 1:
+            scenes[name]["os_placed"] = {k: summaries[1][k] for k in (
                 "cold_build_ms", "warm_build_ms", "cold_over_warm", "cold_samples",
                 "warm_samples")}
     result = {**run_record(args.kdray), "kdray": args.kdray, "rounds": args.cold,
               "repeat": args.repeat, "pocl_cache_dir": os.environ.get("POCL_CACHE_DIR", ""),
-              "threads_pinned": bool(os_placed_env), "scenes": scenes}
+              "threads_pinned": len(envs) > 1, "scenes": scenes}
     os.makedirs(os.path.dirname(args.out), exist_ok=True)
     write_json(args.out + ".json", result)
-    placed_columns = os_placed_env is not None
+    placed_columns = len(envs) > 1
     lines = ["# Cold and warm builds", "",
              f"Run {result['date']} on {result['machine']}.",
              f"{args.cold} rounds, each one fresh `kdray build SCENE --json` (cold: its build_ms, "
              f"and the process's wall time) and one `kdray build --repeat {args.repeat}` process "
              "(warm: its builds after the warm-up); medians. PoCL's kernel cache was warm."
-             + (" The last columns: the same rounds with PoCL's threads placed by the OS "
-                "(POCL_AFFINITY=0) rather than pinned by kdray (cl/runtime/driver_environment.h)."
+             + (" The last columns: PoCL's threads placed by the OS (POCL_AFFINITY=0) rather "
+                "than pinned at kdray's asking (cl/runtime/driver_threads.h), a process of each "
+                "in every round after the pinned ones."
                 if placed_columns else ""), "",
              "| scene | triangles | cold build ms | warm build ms | cold / warm "
              "| cold process ms | its load, prepare ms | its CPU user, sys ms "

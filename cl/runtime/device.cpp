@@ -17,6 +17,7 @@
 
 #include "cl/runtime/cl_error.h"
 #include "cl/runtime/driver_environment.h"
+#include "cl/runtime/driver_threads.h"
 #include "cl/runtime/program_cache.h"
 #include "cl/runtime/work_group.h"
 #include "core/error.h"
@@ -67,7 +68,7 @@ struct FoundDevice {
 std::vector<FoundDevice> find_devices() {
     ensure_writable_kernel_cache();
     ensure_open_file_limit();
-    pin_cpu_driver_threads();
+    ask_cpu_driver_to_pin_threads();
     std::vector<cl::Platform> platforms;
     // The ICD loader reports "no platform" as an error code (CL_PLATFORM_NOT_FOUND_KHR) rather than
     // an empty list.
@@ -110,9 +111,7 @@ std::vector<FoundDevice> find_devices() {
             // The C++ bindings keep the terminating NUL of string queries.
             for (std::string* s : {&info.name, &info.vendor, &info.version})
                 while (!s->empty() && s->back() == '\0') s->pop_back();
-            info.threads_pinned = info.type == "CPU" &&
-                                  info.version.find("PoCL") != std::string::npos &&
-                                  cpu_driver_threads_pinned();
+            info.threads_pinned = pins_its_threads(info);
             found.push_back({device, info});
         }
     }

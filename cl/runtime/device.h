@@ -32,8 +32,8 @@ struct ClDeviceInfo {
     std::uint64_t max_alloc_bytes = 0;
     /// Whether the device has double precision (CL_DEVICE_DOUBLE_FP_CONFIG not 0: cl_khr_fp64).
     bool fp64 = false;
-    /// Whether the driver keeps each of its worker threads on one CPU: PoCL's CPU device with
-    /// POCL_AFFINITY=1 (driver_environment.h's pin_cpu_driver_threads).
+    /// Whether the driver keeps each of its worker threads on one CPU: PoCL's pthread device on
+    /// Linux, asked to (driver_threads.h).
     bool threads_pinned = false;
 };
 

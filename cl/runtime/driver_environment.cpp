@@ -1,12 +1,10 @@
 #include "cl/runtime/driver_environment.h"
 
-#include <sched.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <system_error>
 #include <vector>
@@ -117,36 +115,6 @@ void ensure_open_file_limit() {
                                                  : std::to_string(limit.rlim_max)) +
                 "), fewer than the " + std::to_string(kMinOpenFiles) +
                 " an OpenCL driver needs to compile kdray's kernels: raise it (`ulimit -n 1024`)");
-}
-
-bool should_pin_cpu_driver_threads(const char* pocl_affinity, const std::vector<int>& allowed_cpus,
-                                   int online_cpus) {
-    if (pocl_affinity || online_cpus < 2) return false;
-    if (allowed_cpus.size() != static_cast<std::size_t>(online_cpus)) return false;
-    std::vector<int> sorted = allowed_cpus;
-    std::sort(sorted.begin(), sorted.end());
-    for (int i = 0; i < online_cpus; ++i)
-        if (sorted[static_cast<std::size_t>(i)] != i) return false;
-    return true;
-}
-
-void pin_cpu_driver_threads() {
-#ifdef __linux__
-    cpu_set_t mask;
-    CPU_ZERO(&mask);
-    if (::sched_getaffinity(0, sizeof(mask), &mask) != 0) return;
-    std::vector<int> allowed;
-    for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu)
-        if (CPU_ISSET(cpu, &mask)) allowed.push_back(cpu);
-    const long online = ::sysconf(_SC_NPROCESSORS_ONLN);
-    if (should_pin_cpu_driver_threads(std::getenv("POCL_AFFINITY"), allowed, int(online)))
-        ::setenv("POCL_AFFINITY", "1", 0);
-#endif
-}
-
-bool cpu_driver_threads_pinned() {
-    const char* value = std::getenv("POCL_AFFINITY");
-    return value && std::strcmp(value, "1") == 0;
 }
 
 std::string no_device_message(const std::string& failure) {

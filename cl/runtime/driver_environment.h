@@ -7,7 +7,6 @@
 
 #include <cstdint>
 #include <string>
-#include <vector>
 
 namespace kdray {
 
@@ -23,27 +22,6 @@ inline constexpr std::uint64_t kMinOpenFiles = 64;
 /// drivers run do, slows down with a hard limit of 2^20). Throws Error, naming the limits and
 /// the remedy, when even the hard limit is below kMinOpenFiles.
 void ensure_open_file_limit();
-
-/// Whether to ask PoCL's CPU driver to keep each worker thread on one CPU (POCL_AFFINITY=1), given
-/// that variable's value (nullptr when unset), the CPUs this process may run on and the number
-/// online. Only when the environment does not say either way, and only when the process may run
-/// on every online CPU, numbered 0 to n - 1: PoCL pins its thread i to CPU i, which a process
-/// confined to some CPUs (taskset, a cgroup's cpuset, a batch scheduler's allocation) may not
-/// use, and newer PoCL releases check that pinning and abort when it fails.
-bool should_pin_cpu_driver_threads(const char* pocl_affinity, const std::vector<int>& allowed_cpus,
-                                   int online_cpus);
-
-/// Sets POCL_AFFINITY=1 where should_pin_cpu_driver_threads says so, for this process; to be
-/// called before the first OpenCL call (PoCL reads it as it starts its threads). Other drivers
-/// ignore the variable. Why: on a 2-core virtual machine, Linux kept PoCL's two threads on one
-/// CPU after the single-threaded start (program loading) and through the builder's kernels of a
-/// few milliseconds each, so that they took turns: the same CPU time in up to half as long again
-/// (docs/performance.md, "Pinned threads"; docs/cold-build.md measures both placements).
-void pin_cpu_driver_threads();
-
-/// Whether PoCL's CPU threads are pinned in this process (POCL_AFFINITY=1, set by
-/// pin_cpu_driver_threads or by the user), for `kdray stats` and the benchmarks' records.
-bool cpu_driver_threads_pinned();
 
 /// The message for "no OpenCL device started": `failure` (what failed, with the OpenCL error)
 /// followed by what to do. Where no driver is installed (no vendor file for the ICD loader), how
