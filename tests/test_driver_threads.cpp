@@ -50,10 +50,12 @@ TEST_CASE("pinned threads are asked for only where the environment and the CPUs 
 
 namespace {
 
-/// Unsets what would decide for kdray: the variables of test_driver_threads' cases.
-const std::string kUnsetThreadVariables =
-    "unset POCL_AFFINITY POCL_MAX_PTHREAD_COUNT POCL_PTHREAD_MIN_THREADS POCL_CPU_MAX_CU_COUNT "
-    "POCL_MAX_COMPUTE_UNITS";
+/// Shell commands that unset what would decide for kdray: POCL_AFFINITY and PoCL's thread count.
+std::string unset_thread_variables() {
+    std::string command = "unset POCL_AFFINITY";
+    for (const char* name : kPoclThreadCountVariables) command += std::string(" ") + name;
+    return command;
+}
 
 /// The "threads_pinned" of `kdray stats --json`'s PoCL pthread device, after `shell_setup` in its
 /// shell; `found` says whether there is one.
@@ -103,7 +105,7 @@ TEST_CASE("kdray stats says whether PoCL's threads are pinned: by default, by th
     const int cpus = contiguous_cpus();
     const bool every_cpu = may_run_on(cpus);
     bool found = false;
-    const bool by_default = stats_says_pinned(kUnsetThreadVariables, &found);
+    const bool by_default = stats_says_pinned(unset_thread_variables(), &found);
     if (!found) {
         MESSAGE("no PoCL pthread device: nothing to check");
         return;
@@ -111,7 +113,7 @@ TEST_CASE("kdray stats says whether PoCL's threads are pinned: by default, by th
     CHECK(by_default == (every_cpu && cpus > 1));
     CHECK_FALSE(stats_says_pinned("export POCL_AFFINITY=0", &found));
     CHECK_FALSE(
-        stats_says_pinned(kUnsetThreadVariables + "; export POCL_MAX_PTHREAD_COUNT=2", &found));
+        stats_says_pinned(unset_thread_variables() + "; export POCL_MAX_PTHREAD_COUNT=2", &found));
     // Asked for by the user: only where PoCL can pin every thread (it aborts where it cannot).
     if (every_cpu) CHECK(stats_says_pinned("export POCL_AFFINITY=1", &found));
     if (every_cpu && cpus > 1) {
@@ -122,7 +124,7 @@ TEST_CASE("kdray stats says whether PoCL's threads are pinned: by default, by th
         CPU_ZERO(&last);
         CPU_SET(cpus - 1, &last);
         REQUIRE(sched_setaffinity(0, sizeof(last), &last) == 0);
-        const bool confined = stats_says_pinned(kUnsetThreadVariables, &found);
+        const bool confined = stats_says_pinned(unset_thread_variables(), &found);
         REQUIRE(sched_setaffinity(0, sizeof(all), &all) == 0);
         CHECK_FALSE(confined);
     }

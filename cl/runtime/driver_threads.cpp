@@ -14,11 +14,6 @@
 namespace kdray {
 namespace {
 
-/// The variables with which a user sets PoCL's thread count (3.x and later releases' names).
-constexpr const char* kThreadCountVariables[] = {"POCL_MAX_PTHREAD_COUNT",
-                                                 "POCL_PTHREAD_MIN_THREADS",
-                                                 "POCL_CPU_MAX_CU_COUNT", "POCL_MAX_COMPUTE_UNITS"};
-
 /// The CPUs of a kernel CPU list file ("0-3,6"), or nothing when it cannot be read or parsed.
 /// Read from sysfs rather than sysconf(_SC_NPROCESSORS_ONLN), which some C libraries answer
 /// with the process's affinity mask.
@@ -69,7 +64,7 @@ void ask_cpu_driver_to_pin_threads() {
 #ifdef __linux__
     CpuDriverThreadsContext context;
     context.pocl_affinity = std::getenv("POCL_AFFINITY");
-    for (const char* name : kThreadCountVariables)
+    for (const char* name : kPoclThreadCountVariables)
         context.thread_count_set = context.thread_count_set || std::getenv(name);
     cpu_set_t mask;
     CPU_ZERO(&mask);

@@ -13,6 +13,11 @@
 
 namespace kdray {
 
+/// The variables with which a user sets PoCL's thread count (3.x and later releases' names).
+inline constexpr const char* kPoclThreadCountVariables[] = {
+    "POCL_MAX_PTHREAD_COUNT", "POCL_PTHREAD_MIN_THREADS", "POCL_CPU_MAX_CU_COUNT",
+    "POCL_MAX_COMPUTE_UNITS"};
+
 /// What decides whether to ask for pinned threads.
 struct CpuDriverThreadsContext {
     const char* pocl_affinity = nullptr;  // POCL_AFFINITY's value, nullptr when unset

@@ -1,10 +1,11 @@
 /* build_small_level.cl — the small-node stage in the paper's shape (Zhou et al. 2008, §4.2): the
  * small nodes of one level at a time across the device, one work-group of KDRAY_LAUNCH_GROUP
- * work-items (every launch's group size) per node. Work-item j prices the six candidates of the
+ * work-items (most launches' group size, launch.h) per node. Work-item j prices the six candidates of the
  * node's j-th reference (the popcounts of its masks and the candidates' side masks,
  * build_small_search.cl) and the group reduces the costs in local memory to the cheapest
- * candidate, so no work-item holds a table of its own. build_small.cl's per-root kernel builds each root's subtree in one work-item instead,
- * with 4.6 KB of private tables: a CPU's shape, which on a GPU spills and starves occupancy.
+ * candidate, so no work-item holds a table of its own. build_small.cl's per-root kernel builds
+ * each root's subtree in one work-item instead, with 4.6 KB of private tables: a CPU's shape,
+ * which on a GPU spills and starves occupancy.
  *
  * Both shapes make the same decisions from the same inputs, so the trees are the same node for
  * node: the same candidates and SAH (kd_price_candidates), the same pick (least cost, then least
