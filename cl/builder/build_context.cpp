@@ -37,6 +37,7 @@ BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins) {
         k.build_depth_first = make_kernel(large, "kd_build_large_depth_first");
         k.commit_depth_first = make_kernel(large, "kd_commit_depth_first");
         k.split_masks = make_kernel(small, "kd_compute_split_masks");
+        k.split_masks_grouped = make_kernel(small, "kd_compute_split_masks_grouped");
         k.build_subtrees = make_kernel(small, "kd_build_small_subtrees");
         k.second_pass_records = make_kernel(small, "kd_second_pass_records");
         k.start_small_level = make_kernel(small, "kd_start_small_level");

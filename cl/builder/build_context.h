@@ -26,7 +26,7 @@ struct BuilderKernels {
     // The large stage's element-parallel shape (build_large_groups.cl, in the large program).
     cl::Kernel reduce_box_groups, bin_large_groups, sum_node_bins, classify_groups,
         distribute_groups;
-    cl::Kernel split_masks, build_subtrees, second_pass_records;
+    cl::Kernel split_masks, split_masks_grouped, build_subtrees, second_pass_records;
     // The small stage's per-level shape (build_small_level.cl, in the small program).
     cl::Kernel start_small_level, split_small_level, size_small_level, place_small_level,
         count_small_level, write_small_level;

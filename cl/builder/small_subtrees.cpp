@@ -149,7 +149,12 @@ SmallSubtrees run_small_stage(BuildContext& ctx, const SmallRoots& small,
         out.side_masks = DeviceArray();
         out.side_masks = ctx.memory.allocate(std::size_t(batch.refs) * KDRAY_MASK_BYTES_PER_REF,
                                              "candidate masks");
-        enqueue_kernel(ctx.device, ctx.kernels.split_masks, batch.refs, batch.ref_begin, batch.refs,
+        // The masks in the shape of the stage's schedule: a work-item per reference for the
+        // per-level (GPU) stage, per KDRAY_MASK_GROUP references for the per-root (CPU) one.
+        cl::Kernel& masks = per_level ? ctx.kernels.split_masks : ctx.kernels.split_masks_grouped;
+        const std::size_t items =
+            per_level ? batch.refs : (batch.refs + KDRAY_MASK_GROUP - 1) / KDRAY_MASK_GROUP;
+        enqueue_kernel(ctx.device, masks, items, batch.ref_begin, batch.refs,
                        small.ref_box.buffer(), small.ref_root.buffer(), small.roots.buffer(),
                        out.side_masks.buffer());
         if (per_level)

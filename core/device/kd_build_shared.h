@@ -73,6 +73,8 @@
  * above, each group padded to 8 ulongs, so that a reference's masks load as two ulong8. */
 #define KDRAY_MASK_WORDS_PER_REF 16u
 #define KDRAY_MASK_BYTES_PER_REF (KDRAY_MASK_WORDS_PER_REF * 8u)
+/* References per work-item of the masks' CPU shape (kd_compute_split_masks_grouped). */
+#define KDRAY_MASK_GROUP 4u
 
 /* Work-items of every work-group the builder launches (cl/runtime/launch.h rounds each launch's
  * size up to a multiple of it): one per reference a small node may hold, since the per-level

@@ -3,7 +3,7 @@
  * of a node and of each split candidate held as 64-bit masks over the root's triangle list.
  *
  *   kd_compute_split_masks     preprocessing: per candidate plane, the masks of the root's
- *                              triangles below and above it
+ *                              triangles below and above it (and _grouped, its CPU shape)
  *   kd_build_small_subtrees    per small root: its whole subtree, depth first, in preorder
  *
  * The paper splits the small nodes of one level at a time, with a launch per level. Here one
@@ -44,16 +44,20 @@
  * with the planar side below: below when lo < plane or when not hi > plane, above when
  * hi > plane), except in the hi lane of an axis on which the reference is flat, where triangles
  * lying in the plane go above (below when lo < plane, above when hi > plane or lo >= plane).
- * One work-item per reference computes its six candidates together in the lanes of
- * one float8 (two lanes unused), so each box of the root is loaded once for six planes; the
- * work-items of one root run the same loop, which keeps GPU lanes converged. Per plane, one
- * scalar loop over the root took 86 ms of CPU per kitchen build (perf); this one 24 ms. */
-__kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const float* ref_box,
-                                     __global const uint* ref_root,
-                                     __global const KdSmallRoot* small_roots,
-                                     __global ulong* side_masks) {
-    if (get_global_id(0) >= refs) return;
-    const uint ref = ref_begin + (uint)get_global_id(0);
+ * A reference's six candidates are computed together in the lanes of one float8 (two lanes
+ * unused), so each box of the root is loaded once for six planes. Per plane, one scalar loop over
+ * the root took 86 ms of CPU per kitchen build (perf); this one 24 ms.
+ *
+ * Two shapes, the same masks bit for bit: kd_compute_split_masks, one work-item per reference,
+ * whose work-items of one root run the same loop (GPU lanes stay converged; the per-level small
+ * stage's); and kd_compute_split_masks_grouped, a work-item per KDRAY_MASK_GROUP references
+ * (CPU devices; the per-root stage's), which loads each box of the root once for all of them. */
+
+/* The masks of reference `ref` (of the batch from ref_begin on) alone. */
+KDRAY_INLINE void kd_split_masks_of(uint ref, uint ref_begin, __global const float* ref_box,
+                                    __global const uint* ref_root,
+                                    __global const KdSmallRoot* small_roots,
+                                    __global ulong* side_masks) {
     const float8 pos = kd_candidate_lanes(ref_box + (size_t)ref * KDRAY_BOX_FLOATS);
     const int8 planar_above = kd_planar_above_lanes(pos);
     const uint root = ref_root[ref];
@@ -80,6 +84,84 @@ __kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const f
     const ulong8 above = convert_ulong8(above_half[0]) | (convert_ulong8(above_half[1]) << 32);
     vstore8(below, 0, side_masks + (size_t)(ref - ref_begin) * KDRAY_MASK_WORDS_PER_REF);
     vstore8(above, 1, side_masks + (size_t)(ref - ref_begin) * KDRAY_MASK_WORDS_PER_REF);
+}
+
+/* Work-item r: the masks of the batch's reference ref_begin + r (of refs). */
+__kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const float* ref_box,
+                                     __global const uint* ref_root,
+                                     __global const KdSmallRoot* small_roots,
+                                     __global ulong* side_masks) {
+    if (get_global_id(0) >= refs) return;
+    kd_split_masks_of(ref_begin + (uint)get_global_id(0), ref_begin, ref_box, ref_root,
+                      small_roots, side_masks);
+}
+
+/* Work-item g: the masks of the batch's references KDRAY_MASK_GROUP g .. (of refs), four. Those
+ * of the group's first root are priced together, the candidates of two references per float16,
+ * against each box of the root loaded once; any of another root (a root ends inside the group)
+ * alone. Half the loads and shuffles per candidate: at low, the kernel's perf samples over 21
+ * builds went 1030 -> 735 on the Kitchen and 1709 -> 1146 on dragon res2, the Kitchen build
+ * 30.7 -> 27.9 ms (2 PoCL threads, interleaved). */
+__kernel void kd_compute_split_masks_grouped(uint ref_begin, uint refs,
+                                             __global const float* ref_box,
+                                             __global const uint* ref_root,
+                                             __global const KdSmallRoot* small_roots,
+                                             __global ulong* side_masks) {
+    const uint first = KDRAY_MASK_GROUP * (uint)get_global_id(0);
+    if (first >= refs) return;
+    const uint ref = ref_begin + first, root = ref_root[ref];
+    const uint in_batch = min(KDRAY_MASK_GROUP, refs - first);
+    uint together = 1;
+    while (together < in_batch && ref_root[ref + together] == root) ++together;
+    /* Lanes 8k.. of pos[k / 2]: reference k's candidates; past `together`, the last one's again. */
+    float8 candidates[KDRAY_MASK_GROUP];
+    for (uint k = 0; k < KDRAY_MASK_GROUP; ++k)
+        candidates[k] = kd_candidate_lanes(ref_box +
+                                           (size_t)(ref + min(k, together - 1u)) * KDRAY_BOX_FLOATS);
+    float16 pos[2];
+    int16 planar_above[2];
+    for (uint h = 0; h < 2; ++h) {
+        pos[h] = (float16)(candidates[2 * h], candidates[2 * h + 1]);
+        planar_above[h] = (int16)(kd_planar_above_lanes(candidates[2 * h]),
+                                  kd_planar_above_lanes(candidates[2 * h + 1]));
+    }
+    const uint start = small_roots[root].ref_start, count = small_roots[root].ref_count;
+    /* [h][part]: the masks of pos[h]'s lanes, bits 32 part.. of the root's references. */
+    uint16 below_bits[2][2], above_bits[2][2];
+    for (uint part = 0; part < 2; ++part) {
+        uint16 below0 = (uint16)(0), above0 = (uint16)(0), below1 = (uint16)(0),
+               above1 = (uint16)(0);
+        const uint end = min(count, 32u * (part + 1));
+        for (uint j = 32u * part; j < end; ++j) {
+            float8 lo8, hi8;
+            kd_box_lanes(kd_load_box(ref_box, start + j), &lo8, &hi8);
+            const float16 lo = (float16)(lo8, lo8), hi = (float16)(hi8, hi8);
+            const uint bit = 1u << (j & 31u);
+            int16 is_below, is_above;
+            KDRAY_CANDIDATE_SIDES(int16, pos[0], planar_above[0], lo, hi, is_below, is_above);
+            below0 |= as_uint16(is_below) & bit;
+            above0 |= as_uint16(is_above) & bit;
+            KDRAY_CANDIDATE_SIDES(int16, pos[1], planar_above[1], lo, hi, is_below, is_above);
+            below1 |= as_uint16(is_below) & bit;
+            above1 |= as_uint16(is_above) & bit;
+        }
+        below_bits[0][part] = below0;
+        above_bits[0][part] = above0;
+        below_bits[1][part] = below1;
+        above_bits[1][part] = above1;
+    }
+    __global ulong* out = side_masks + (size_t)first * KDRAY_MASK_WORDS_PER_REF;
+    for (uint k = 0; k < together; ++k) {
+        const uint h = k / 2;
+        const uint8 below_lo = (k & 1u) ? below_bits[h][0].hi : below_bits[h][0].lo;
+        const uint8 below_hi = (k & 1u) ? below_bits[h][1].hi : below_bits[h][1].lo;
+        const uint8 above_lo = (k & 1u) ? above_bits[h][0].hi : above_bits[h][0].lo;
+        const uint8 above_hi = (k & 1u) ? above_bits[h][1].hi : above_bits[h][1].lo;
+        vstore8(convert_ulong8(below_lo) | (convert_ulong8(below_hi) << 32), 2 * k, out);
+        vstore8(convert_ulong8(above_lo) | (convert_ulong8(above_hi) << 32), 2 * k + 1, out);
+    }
+    for (uint k = together; k < in_batch; ++k)
+        kd_split_masks_of(ref + k, ref_begin, ref_box, ref_root, small_roots, side_masks);
 }
 
 /* The masks carry boxes clipped to the small root (or to a re-clipping ancestor), not to the node,
