@@ -142,6 +142,7 @@ std::string group_of(const std::string& key) {
         {"large_node_levels", "device"},
         {"depth_first_subtrees", "device"},
         {"depth_first_rounds", "device"},
+        {"depth_first_rebuilt", "device"},
         {"small_node_levels", "device"},
         {"kernel_launches", "device"},
         {"warnings", "warnings"},

@@ -112,6 +112,26 @@ def coplanar():
     return tris
 
 
+def slivers():
+    """150 small triangles and, beside them, 80 long slivers that every split cuts: with T = 8 the
+    slivers' depth-first subtrees run out of their arenas and are built again, the others' not."""
+    rnd = lcg(5)
+    tris = []
+    for _ in range(150):
+        c = (next(rnd), next(rnd), next(rnd))
+        tris.append(tuple(tuple(c[i] + 0.1 * (next(rnd) - 0.5) for i in range(3))
+                          for _ in range(3)))
+    for _ in range(80):
+        c = (2 + next(rnd), next(rnd), next(rnd))
+        d = [2 * next(rnd) - 1 for _ in range(3)]
+        scale = 0.5 / max(1e-3, math.sqrt(sum(x * x for x in d)))
+        w = [0.02 * (next(rnd) - 0.5) for _ in range(3)]
+        tris.append((tuple(c[i] - scale * d[i] for i in range(3)),
+                     tuple(c[i] + scale * d[i] for i in range(3)),
+                     tuple(c[i] + w[i] for i in range(3))))
+    return tris
+
+
 def coincident():
     """100 triangles, each twice (coincident faces), and a fan sharing one vertex."""
     rnd = lcg(11)
@@ -237,6 +257,8 @@ def scenes(work):
                                            (0, 0, 0)),
         "coincident": lambda: geometry_scene(work / "coincident", "coincident", coincident(),
                                              (0, 2, 14), (0, 0, 0)),
+        "slivers": lambda: geometry_scene(work / "slivers", "slivers", slivers(), (1.5, 0.5, 6),
+                                          (1.5, 0.5, 0.5)),
         "effects": lambda: effects_scene(work / "effects"),
         "path": lambda: path_scene(work / "path"),
         "anim": lambda: animation(work / "anim"),
@@ -257,6 +279,11 @@ CASES = {
     "clusters-depth-first-t8": ("clusters", ["--quality", "high", "--small-stage", "per-root",
                                              "--large-stage", "depth-first",
                                              "--large-node-threshold", "8"]),
+    # Depth-first subtrees built again with larger arenas, in a second and third run of only
+    # those that ran out (RERUN_CASES checks that they did).
+    "slivers-depth-first-t8": ("slivers", ["--quality", "high", "--small-stage", "per-root",
+                                           "--large-stage", "depth-first",
+                                           "--large-node-threshold", "8"]),
     "coplanar-medium-per-level": ("coplanar", ["--quality", "medium", "--small-stage", "per-level"]),
     "coplanar-high-per-root": ("coplanar", ["--quality", "high", "--small-stage", "per-root",
                                             "--large-stage", "chunked"]),
@@ -279,6 +306,22 @@ CASES = {
     "local-32k": ("clusters", ["--small-stage", "per-level"],
                   ["--max-wgsize", "256", "--local-mem-size", "32768"]),
 }
+
+
+# Cases whose depth-first stage must run its kernel again for some subtrees, not all: else the
+# case no longer covers those runs.
+RERUN_CASES = {"slivers-depth-first-t8"}
+
+
+def rerun_failures(stats_path):
+    """What is wrong with a RERUN_CASES render's depth-first runs, by its stats.json."""
+    tree = json.loads(stats_path.read_text())["frames"][0]["tree"]
+    rounds, rebuilt = tree.get("depth_first_rounds", 0), tree.get("depth_first_rebuilt", 0)
+    subtrees = tree.get("depth_first_subtrees", 0)
+    if rounds > 1 and 0 < rebuilt < subtrees * (rounds - 1):
+        return []
+    return [f"depth-first runs {rounds}, subtrees {subtrees}, rebuilt {rebuilt}: the case "
+            "no longer makes some subtrees (and not all) run out of their arenas"]
 
 
 def oclgrind_reports(stderr):
@@ -311,6 +354,8 @@ def check_case(kdray, work, name, built):
             detail = "\n    ".join((reports or r.stderr.strip().splitlines())[:12])
             failures.append(f"{label}: exit {r.returncode}; Oclgrind said:\n    {detail}")
             continue
+        if name in RERUN_CASES:
+            failures += [f"{label}: {f}" for f in rerun_failures(got / "stats.json")]
         for obj in objs:
             stem = obj.stem
             c = run([str(kdray), "compare", str(got / f"{stem}.aov.exr"),

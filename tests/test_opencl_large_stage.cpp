@@ -17,6 +17,7 @@
 #include "cl/builder/opencl_builder.h"
 #include "core/scene/scene.h"
 #include "core/tree/build_quality.h"
+#include "core/tree/tree_check.h"
 #include "core/tree/tree_stats.h"
 #include "tests/support.h"
 #include "tests/test_opencl_fixture.h"
@@ -61,7 +62,14 @@ void check_same_as_chunked(const Scene& scene, const std::string& name,
     CHECK(depth_first_report.budget_leaves == chunked_report.budget_leaves);
     if (expect != DepthFirst::Any) CHECK(depth_first_report.depth_first_subtrees > 0);
     if (expect == DepthFirst::OneRound) CHECK(depth_first_report.depth_first_rounds == 1);
-    if (expect == DepthFirst::Retried) CHECK(depth_first_report.depth_first_rounds > 1);
+    if (expect == DepthFirst::OneRound) CHECK(depth_first_report.depth_first_rebuilt == 0);
+    if (expect == DepthFirst::Retried) {
+        const std::size_t later_runs = std::size_t(depth_first_report.depth_first_rounds - 1);
+        CHECK(later_runs > 0);
+        CHECK(depth_first_report.depth_first_rebuilt > 0);
+        CHECK(depth_first_report.depth_first_rebuilt <=
+              depth_first_report.depth_first_subtrees * later_runs);
+    }
     test::check_same_tree(level, chunked, scene, 31);
     test::check_same_tree(depth_first, chunked, scene, 31);
 }
@@ -110,6 +118,17 @@ TEST_CASE(
     }
 }
 
+/// Uniform random triangles and, beside them on x, long slivers that every split cuts: subtrees of
+/// the slivers outgrow arenas that those of the others fit in.
+Scene slivers_beside_random() {
+    const Scene easy = test::random_triangles(20000, 2801);
+    const Scene hard = test::long_slivers(2000, 7);
+    std::vector<float> tris = easy.triangles;
+    for (std::size_t i = 0; i < hard.triangles.size(); ++i)
+        tris.push_back(hard.triangles[i] + (i % 3 == 0 ? 2.0f : 0.0f));
+    return make_scene(std::move(tris), "slivers_beside_random");
+}
+
 TEST_CASE("opencl large stage: depth-first subtrees whose arenas run out are built again") {
     // Arenas a sixteenth of their size: most subtrees run out of records, small roots or their
     // references on the first try and are built again with larger ones; the tree is the same.
@@ -119,6 +138,30 @@ TEST_CASE("opencl large stage: depth-first subtrees whose arenas run out are bui
                           DepthFirst::Retried, limits);
     check_same_as_chunked(test::long_slivers(600, 7), "long_slivers_small_arenas", {},
                           DepthFirst::Retried, limits);
+}
+
+TEST_CASE("opencl large stage: only the subtrees whose arenas ran out are built again") {
+    // At the usual arena sizes the slivers' subtrees run out, for a few runs, and the random
+    // triangles' do not: each later run builds only those that ran out. The tree cannot depend on
+    // the run that built a subtree: arenas a quarter the size (more runs, each building others)
+    // make the same one. (The levels are no oracle here: the slivers fill the subtrees'
+    // reference budgets, which bound other nodes than the levels' budget.)
+    const Scene scene = slivers_beside_random();
+    ClDevice& device = test::opencl_test_device();
+    const BuildParams params = with_stage({}, LargeStage::DepthFirst);
+    BuildReport usual_report, small_report;
+    const KdTree usual = detail::build_opencl_with_limits(device, scene, params, {}, &usual_report);
+    detail::SmallStageLimits small_arenas;
+    small_arenas.depth_first_arena_shift = 2;
+    const KdTree small =
+        detail::build_opencl_with_limits(device, scene, params, small_arenas, &small_report);
+    const std::size_t later_runs = std::size_t(usual_report.depth_first_rounds - 1);
+    CHECK(later_runs > 0);
+    CHECK(usual_report.depth_first_rebuilt > 0);
+    CHECK(usual_report.depth_first_rebuilt < usual_report.depth_first_subtrees * later_runs);
+    CHECK(small_report.depth_first_rounds > usual_report.depth_first_rounds);
+    CHECK(check_tree(usual, scene).empty());
+    test::check_same_tree(small, usual, scene, 37);
 }
 
 TEST_CASE("opencl large stage: the hard scenes build the same tree in every shape") {

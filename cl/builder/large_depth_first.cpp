@@ -54,25 +54,33 @@ std::uint64_t arena_capacity(unsigned kind, std::uint64_t n, std::uint64_t thres
     return grow >= 0 ? cap << grow : cap >> -grow;
 }
 
-/// Starts of every arena kind (KDRAY_DF_KINDS rows of nodes + 1), from each subtree's size.
+/// The arena starts of a run (kd_depth_first_root, build_large_depth_first.cl): for every arena
+/// kind a row of nodes + 1 starts, from the sizes of the subtrees the run builds (the others get
+/// none), then the run's items, the deep roots it builds.
 std::vector<cl_uint> arena_starts(const std::vector<cl_uint>& refs, std::uint64_t threshold,
-                                  const std::vector<std::array<int, KDRAY_DF_KINDS>>& grow) {
+                                  const std::vector<std::array<int, KDRAY_DF_KINDS>>& grow,
+                                  const std::vector<cl_uint>& items) {
     const std::size_t nodes = refs.size();
+    std::vector<bool> built(nodes, false);
+    for (cl_uint w : items) built[w] = true;
     std::vector<cl_uint> start(KDRAY_DF_KINDS * (nodes + 1));
     for (unsigned kind = 0; kind < KDRAY_DF_KINDS; ++kind) {
         std::uint64_t at = 0;
         for (std::size_t w = 0; w <= nodes; ++w) {
             start[kind * (nodes + 1) + w] = checked_u32(at, "depth-first arena entries");
-            if (w < nodes) at += arena_capacity(kind, refs[w], threshold, grow[w][kind]);
+            if (w < nodes && built[w])
+                at += arena_capacity(kind, refs[w], threshold, grow[w][kind]);
         }
     }
+    start.insert(start.end(), items.begin(), items.end());
     return start;
 }
 
-/// The arenas of one run of the depth-first kernel.
+/// The arenas of one run of the depth-first kernel, kept until its subtrees are committed.
 struct Arenas {
     DeviceArray start, work_tri, work_box, records, roots, small_tri, small_box, leaf_refs, stacks,
         counts;
+    cl_uint items = 0;
 };
 
 cl_uint arena_total(const std::vector<cl_uint>& start, unsigned kind, std::size_t nodes) {
@@ -107,17 +115,23 @@ DepthFirstResult build_depth_first(BuildContext& ctx, const TriangleBounds& tria
                                 cl_uint(kReferenceBudgetPerTriangle)};
 
     /* Build; an output arena that ran out is made 4 times larger for its subtree and the kernel
-     * runs again (it only reads the deep roots). Real scenes fit at the first run; input whose
-     * splits cut most triangles fills arenas of any size made from the root's size alone (the
-     * per-depth budget bounds each depth, not their sum), and takes a few runs. */
+     * runs again for those subtrees alone (it only reads the deep roots). Real scenes fit at the
+     * first run; input whose splits cut most triangles fills arenas of any size made from the
+     * root's size alone (the per-depth budget bounds each depth, not their sum), and takes a few
+     * runs. Each run's arenas are kept until its subtrees are committed. */
     const int shift = -int(arena_shift);
     std::vector<std::array<int, KDRAY_DF_KINDS>> grow(nodes, {0, shift, shift, shift, shift});
-    std::vector<cl_uint> start, counts(nodes * KDRAY_DF_COUNTS);
-    Arenas a;
+    std::vector<cl_uint> counts(nodes * KDRAY_DF_COUNTS);  // of every subtree, from its last run
+    std::vector<cl_uint> items(nodes);
+    for (std::size_t w = 0; w < nodes; ++w) items[w] = cl_uint(w);
+    std::vector<Arenas> runs;
     DepthFirstResult result;
     for (int round = 0;; ++round) {
         result.rounds = round + 1;
-        start = arena_starts(refs, cl_uint(p.large_node_threshold), grow);
+        const std::vector<cl_uint> start =
+            arena_starts(refs, cl_uint(p.large_node_threshold), grow, items);
+        Arenas& a = runs.emplace_back();
+        a.items = cl_uint(items.size());
         a.start = ctx.allocate<cl_uint>(start.size(), "depth-first arena starts");
         ctx.write(a.start, start);
         const std::size_t work = arena_total(start, KDRAY_DF_WORK, nodes);
@@ -132,29 +146,42 @@ DepthFirstResult build_depth_first(BuildContext& ctx, const TriangleBounds& tria
         a.small_box = ctx.allocate<KdBuildBox>(small_refs, "depth-first small reference boxes");
         a.leaf_refs = ctx.allocate<cl_uint>(arena_total(start, KDRAY_DF_LEAF_REFS, nodes),
                                             "depth-first leaf references");
-        a.stacks = ctx.allocate<KdDepthFirstTask>(nodes * KDRAY_DF_STACK, "depth-first stacks");
-        a.counts = ctx.allocate<cl_uint>(counts.size(), "depth-first counts");
-        enqueue_per_item(ctx.device, ctx.kernels.build_depth_first, nodes, args, deep.node.buffer(),
-                         deep.ref_start.buffer(), deep.ref_count.buffer(), deep.ref_tri.buffer(),
-                         deep.ref_box.buffer(), triangles.triangles.buffer(), a.start.buffer(),
-                         a.work_tri.buffer(), a.work_box.buffer(), a.records.buffer(),
-                         a.roots.buffer(), a.small_tri.buffer(), a.small_box.buffer(),
-                         a.leaf_refs.buffer(), a.stacks.buffer(), a.counts.buffer());
-        ctx.device.read(a.counts.buffer(), 0, counts.size() * sizeof(cl_uint), counts.data(),
-                        "reading the depth-first subtrees' counts");
-        bool full = false;
-        for (std::size_t w = 0; w < nodes; ++w)
+        a.stacks =
+            ctx.allocate<KdDepthFirstTask>(items.size() * KDRAY_DF_STACK, "depth-first stacks");
+        a.counts = ctx.allocate<cl_uint>(items.size() * KDRAY_DF_COUNTS, "depth-first counts");
+        enqueue_per_item(ctx.device, ctx.kernels.build_depth_first, items.size(), args, a.items,
+                         deep.node.buffer(), deep.ref_start.buffer(), deep.ref_count.buffer(),
+                         deep.ref_tri.buffer(), deep.ref_box.buffer(), triangles.triangles.buffer(),
+                         a.start.buffer(), a.work_tri.buffer(), a.work_box.buffer(),
+                         a.records.buffer(), a.roots.buffer(), a.small_tri.buffer(),
+                         a.small_box.buffer(), a.leaf_refs.buffer(), a.stacks.buffer(),
+                         a.counts.buffer());
+        std::vector<cl_uint> run_counts(items.size() * KDRAY_DF_COUNTS);
+        ctx.device.read(a.counts.buffer(), 0, run_counts.size() * sizeof(cl_uint),
+                        run_counts.data(), "reading the depth-first subtrees' counts");
+        // The run is over (the read waited for it); only its outputs are committed.
+        a.work_tri = DeviceArray();
+        a.work_box = DeviceArray();
+        a.stacks = DeviceArray();
+        std::vector<cl_uint> full_items;
+        for (std::size_t g = 0; g < items.size(); ++g) {
+            const cl_uint w = items[g];
+            const cl_uint* run = &run_counts[g * KDRAY_DF_COUNTS];
+            std::copy(run, run + KDRAY_DF_COUNTS, &counts[w * KDRAY_DF_COUNTS]);
+            if (run[KDRAY_DF_WORK] == 0) continue;
             for (unsigned kind = 1; kind < KDRAY_DF_KINDS; ++kind)
-                if (counts[w * KDRAY_DF_COUNTS + KDRAY_DF_WORK] & (1u << kind)) {
-                    grow[w][kind] += 2;
-                    full = true;
-                }
-        if (!full) break;
+                if (run[KDRAY_DF_WORK] & (1u << kind)) grow[w][kind] += 2;
+            full_items.push_back(w);
+        }
+        if (full_items.empty()) break;
+        if (full_items.size() == items.size()) runs.pop_back();  // nothing of it to commit
         if (round == 16 + int(arena_shift))
             throw Error(
                 "OpenCL kd-tree build: the depth-first large stage's arenas kept running "
                 "out after " +
                 std::to_string(round + 1) + " rounds");
+        items = std::move(full_items);
+        result.rebuilt += items.size();
     }
 
     /* Where each subtree's output goes: after what the levels made, subtree after subtree. */
@@ -179,12 +206,15 @@ DepthFirstResult build_depth_first(BuildContext& ctx, const TriangleBounds& tria
     DeviceArray base_array = ctx.allocate<cl_uint>(base.size(), "depth-first output bases");
     ctx.write(base_array, base);
     output.regions = ctx.allocate<KdLargeRegion>(nodes, "depth-first subtrees");
-    enqueue_per_item(ctx.device, ctx.kernels.commit_depth_first, nodes, cl_uint(nodes),
-                     a.start.buffer(), a.counts.buffer(), base_array.buffer(), deep.node.buffer(),
-                     a.records.buffer(), a.roots.buffer(), a.small_tri.buffer(),
-                     a.small_box.buffer(), a.leaf_refs.buffer(), output.records.buffer(),
-                     small.roots.buffer(), small.ref_tri.buffer(), small.ref_box.buffer(),
-                     small.ref_root.buffer(), output.leaf_store.buffer(), output.regions.buffer());
+    // Each run commits the subtrees that fit in its arenas.
+    for (const Arenas& a : runs)
+        enqueue_per_item(ctx.device, ctx.kernels.commit_depth_first, a.items, cl_uint(nodes),
+                         a.items, a.start.buffer(), a.counts.buffer(), base_array.buffer(),
+                         deep.node.buffer(), a.records.buffer(), a.roots.buffer(),
+                         a.small_tri.buffer(), a.small_box.buffer(), a.leaf_refs.buffer(),
+                         output.records.buffer(), small.roots.buffer(), small.ref_tri.buffer(),
+                         small.ref_box.buffer(), small.ref_root.buffer(),
+                         output.leaf_store.buffer(), output.regions.buffer());
     output.region_count = cl_uint(nodes);
     output.node_count = cl_uint(at[KDRAY_DF_RECORDS]);
     small.count = cl_uint(at[KDRAY_DF_ROOTS]);

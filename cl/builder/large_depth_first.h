@@ -17,10 +17,12 @@ cl_uint deep_root_refs(const BuildContext& ctx, std::size_t triangles);
 
 /// What build_depth_first did: the nodes that became leaves because a subtree's workspace
 /// (kReferenceBudgetPerTriangle references per reference of its root) was full, and the runs of
-/// its kernel (more than one when arenas ran out).
+/// its kernel (more than one when arenas ran out: each run after the first builds only the
+/// subtrees whose arenas ran out in the one before).
 struct DepthFirstResult {
     std::size_t budget_leaves = 0;
     int rounds = 0;
+    std::size_t rebuilt = 0;  // subtrees built again, in the runs after the first
 };
 
 /// Builds every deep root's large subtree depth first, down to its small roots and leaves:

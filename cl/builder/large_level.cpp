@@ -313,6 +313,7 @@ LargeStageResult run_large_stage(BuildContext& ctx, TriangleBounds& triangles, c
             build_depth_first(ctx, triangles, deep, output, small, arena_shift);
         result.budget_leaves += built.budget_leaves;
         result.depth_first_rounds = built.rounds;
+        result.depth_first_rebuilt = built.rebuilt;
     }
 
     return result;

@@ -85,6 +85,7 @@ struct LargeStageResult {
     std::size_t budget_leaves = 0;
     std::size_t depth_first_subtrees = 0;  // deep roots (large_depth_first.h)
     int depth_first_rounds = 0;            // runs of the depth-first kernel
+    std::size_t depth_first_rebuilt = 0;   // subtrees built again after the first run
 };
 
 /// Large-node stage (§4.1): levels until no large node is left, then with the depth-first

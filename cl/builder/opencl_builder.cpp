@@ -166,6 +166,7 @@ KdTree detail::build_opencl_with_limits(ClDevice& device, const Scene& scene,
         report->large_node_levels = large.levels;
         report->depth_first_subtrees = large.depth_first_subtrees;
         report->depth_first_rounds = large.depth_first_rounds;
+        report->depth_first_rebuilt = large.depth_first_rebuilt;
         report->budget_leaves = large.budget_leaves;
         if (large.budget_leaves > 0)
             report->warnings.push_back(

@@ -45,6 +45,7 @@ nlohmann::json tree_json(const BuiltTree& built, std::size_t triangle_count) {
         if (built.report.large_stage == "depth-first") {
             j["depth_first_subtrees"] = built.report.depth_first_subtrees;
             j["depth_first_rounds"] = built.report.depth_first_rounds;
+            j["depth_first_rebuilt"] = built.report.depth_first_rebuilt;
         }
         j["small_node_levels"] = built.report.small_node_levels;
         j["budget_leaves"] = built.report.budget_leaves;

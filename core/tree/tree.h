@@ -123,6 +123,8 @@ struct BuildReport {
     /// Runs of the depth-first kernel: 1, more when a subtree's arenas ran out and it was built
     /// again with larger ones (0 without depth-first subtrees).
     int depth_first_rounds = 0;
+    /// The subtrees those runs after the first built again: only those whose arenas ran out.
+    std::size_t depth_first_rebuilt = 0;
     std::vector<std::string> warnings;  // one line each, for the user and stats.json
 };
 

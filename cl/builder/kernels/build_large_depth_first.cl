@@ -144,21 +144,31 @@ KDRAY_HOT_INLINE uint2 kd_df_partition(uint b, uint n, const uint axis, float sp
     return (uint2)(below, above);
 }
 
-/* Deep root `w` (its references root_ref_start[w] .., root_ref_count[w] of them, its box, record
- * id and depth in deep_root[w]) and its whole large subtree: records, small roots, leaves. counts[w
- * * KDRAY_DF_COUNTS + k]: what it used of arena k (records: with its root), and at KDRAY_DF_WORK
- * the arenas that ran out (bits), at KDRAY_DF_BUDGET_LEAVES the budget leaves. arena[k * (nodes +
- * 1) + w]: item w's first entry of kind k; the next item's is its end. */
+/* The arena starts of a run (kd_build_large_depth_first, kd_commit_depth_first): arena[k * (nodes
+ * + 1) + w] is deep root w's first entry of arena kind k and the next root's is its end (a root
+ * the run does not build has none); after them, from KDRAY_DF_KINDS * (nodes + 1) on, the run's
+ * items, the deep roots it builds, one per work-item: every root in the first run, then only
+ * those whose arenas ran out (cl/builder/large_depth_first.cpp). */
+KDRAY_INLINE uint kd_depth_first_root(__global const uint* arena, uint nodes, uint item) {
+    return arena[KDRAY_DF_KINDS * (nodes + 1) + item];
+}
+
+/* Work-item g builds deep root w = the run's item g (its references root_ref_start[w] ..,
+ * root_ref_count[w] of them, its box, record id and depth in deep_root[w]) and its whole large
+ * subtree: records, small roots, leaves. counts[g * KDRAY_DF_COUNTS + k]: what it used of arena k
+ * (records: with its root), and at KDRAY_DF_WORK the arenas that ran out (bits), at
+ * KDRAY_DF_BUDGET_LEAVES the budget leaves. */
 __kernel void kd_build_large_depth_first(
-    KdDepthFirstArgs args, __global const KdLargeNode* deep_root,
+    KdDepthFirstArgs args, uint items, __global const KdLargeNode* deep_root,
     __global const uint* root_ref_start, __global const uint* root_ref_count,
     __global const uint* ref_tri, __global const float* ref_box, __global const float* triangles,
     __global const uint* arena, __global uint* work_tri, __global float* work_box,
     __global KdBuildNode* records, __global KdSmallRoot* roots, __global uint* small_tri,
     __global float* small_box, __global uint* leaf_refs, __global KdDepthFirstTask* stacks,
     __global uint* counts) {
-    const uint w = get_global_id(0);
-    if (w >= args.nodes) return;
+    const uint g = get_global_id(0);
+    if (g >= items) return;
+    const uint w = kd_depth_first_root(arena, args.nodes, g);
     KdArenas a;
     for (uint k = 0; k < KDRAY_DF_KINDS; ++k) {
         a.start[k] = arena[k * (args.nodes + 1) + w];
@@ -177,7 +187,7 @@ __kernel void kd_build_large_depth_first(
      * the way. */
     const uint n0 = root_ref_count[w], from = root_ref_start[w];
     const uint depth0 = deep_root[w].depth, budget = args.ref_budget * n0;
-    __global KdDepthFirstTask* stack = stacks + (size_t)w * KDRAY_DF_STACK;
+    __global KdDepthFirstTask* stack = stacks + (size_t)g * KDRAY_DF_STACK;
     KdBox root_tight = kd_empty_box();
     for (uint r = 0; r < n0; ++r) {
         const KdBox box = kd_load_box(ref_box, from + r);
@@ -281,19 +291,20 @@ __kernel void kd_build_large_depth_first(
         }
         if (a.full) break;
     }
-    __global uint* out = counts + (size_t)w * KDRAY_DF_COUNTS;
+    __global uint* out = counts + (size_t)g * KDRAY_DF_COUNTS;
     for (uint k = 1; k < KDRAY_DF_KINDS; ++k) out[k] = a.used[k];
     out[KDRAY_DF_WORK] = a.full;
     out[KDRAY_DF_BUDGET_LEAVES] = budget_leaves;
 }
 
-/* Item w's arenas (its counts, as kd_build_large_depth_first reported them) copied to the
- * build's stores: its records from base[KDRAY_DF_RECORDS * nodes + w] on (its root's to the
- * deep root's record id), its small roots, their references and its leaf references from their
- * bases; child ids, small root indices and reference offsets made global. Its KdLargeRegion
- * lists the records for the output stage. */
+/* Work-item g commits deep root w = item g of a run (whose arenas, starts and counts it is
+ * given), unless its arenas ran out in that run (a later run builds and commits it): its arenas
+ * copied to the build's stores, its records from base[KDRAY_DF_RECORDS * nodes + w] on (its
+ * root's to the deep root's record id), its small roots, their references and its leaf references
+ * from their bases; child ids, small root indices and reference offsets made global. Its
+ * KdLargeRegion lists the records for the output stage. */
 __kernel void kd_commit_depth_first(
-    uint nodes, __global const uint* arena, __global const uint* counts,
+    uint nodes, uint items, __global const uint* arena, __global const uint* counts,
     __global const uint* base, __global const KdLargeNode* deep_root,
     __global const KdBuildNode* rec_arena, __global const KdSmallRoot* root_arena,
     __global const uint* small_tri_arena, __global const float* small_box_arena,
@@ -301,9 +312,11 @@ __kernel void kd_commit_depth_first(
     __global KdSmallRoot* small_roots, __global uint* small_ref_tri,
     __global float* small_ref_box, __global uint* small_ref_root, __global uint* leaf_store,
     __global KdLargeRegion* regions) {
-    const uint w = get_global_id(0);
-    if (w >= nodes) return;
-    __global const uint* used = counts + (size_t)w * KDRAY_DF_COUNTS;
+    const uint g = get_global_id(0);
+    if (g >= items) return;
+    __global const uint* used = counts + (size_t)g * KDRAY_DF_COUNTS;
+    if (used[KDRAY_DF_WORK] != 0) return;
+    const uint w = kd_depth_first_root(arena, nodes, g);
     const uint root_id = deep_root[w].id;
     const uint rec_base = base[KDRAY_DF_RECORDS * nodes + w];
     const uint root_base = base[KDRAY_DF_ROOTS * nodes + w];
