@@ -32,7 +32,7 @@
  * of each depth hold to ref_budget per reference of its root: a node whose children could pass
  * that (2n, before it is split), or whose above list would not fit the workspace, becomes a leaf
  * (a budget leaf). The output arenas only count when full: the item stops and reports which ran
- * out, and the host runs the kernel again with them larger. */
+ * out, and the host runs the kernel again for those items alone, with them larger. */
 #ifndef KDRAY_BUILD_LARGE_DEPTH_FIRST_CL
 #define KDRAY_BUILD_LARGE_DEPTH_FIRST_CL
 
