@@ -150,7 +150,9 @@ SmallSubtrees run_small_stage(BuildContext& ctx, const SmallRoots& small,
         out.side_masks = ctx.memory.allocate(std::size_t(batch.refs) * KDRAY_MASK_BYTES_PER_REF,
                                              "candidate masks");
         // The masks in the shape of the stage's schedule: a work-item per reference for the
-        // per-level (GPU) stage, per KDRAY_MASK_GROUP references for the per-root (CPU) one.
+        // per-level (GPU) stage, per KDRAY_MASK_GROUP references for the per-root (CPU) one. A
+        // GPU asked for per-root runs the grouped kernel too (inside docs/gpu-kernels.md's
+        // budgets), and Oclgrind, a GPU, runs it in the per-root cases.
         cl::Kernel& masks = per_level ? ctx.kernels.split_masks : ctx.kernels.split_masks_grouped;
         const std::size_t items =
             per_level ? batch.refs : (batch.refs + KDRAY_MASK_GROUP - 1) / KDRAY_MASK_GROUP;

@@ -46,7 +46,7 @@
  * lying in the plane go above (below when lo < plane, above when hi > plane or lo >= plane).
  * A reference's six candidates are computed together in the lanes of one float8 (two lanes
  * unused), so each box of the root is loaded once for six planes. Per plane, one scalar loop over
- * the root took 86 ms of CPU per kitchen build (perf); this one 24 ms.
+ * the root took 86 ms of CPU per kitchen build (perf); the per-reference shape below 24 ms.
  *
  * Two shapes, the same masks bit for bit: kd_compute_split_masks, one work-item per reference,
  * whose work-items of one root run the same loop (GPU lanes stay converged; the per-level small
@@ -99,9 +99,12 @@ __kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const f
 /* Work-item g: the masks of the batch's references KDRAY_MASK_GROUP g .. (of refs), four. Those
  * of the group's first root are priced together, the candidates of two references per float16,
  * against each box of the root loaded once; any of another root (a root ends inside the group)
- * alone. Half the loads and shuffles per candidate: at low, the kernel's perf samples over 21
- * builds went 1030 -> 735 on the Kitchen and 1709 -> 1146 on dragon res2, the Kitchen build
- * 30.7 -> 27.9 ms (2 PoCL threads, interleaved). */
+ * alone. A quarter of the box loads and shuffles: at low, the masks took about 12.3 -> 8.8 ms of
+ * CPU per Kitchen build and 20.3 -> 13.6 ms per dragon res2 build (perf at 4 kHz over 21 builds),
+ * the Kitchen build 30.7 -> 27.9 ms on 2 PoCL threads (interleaved). */
+#if KDRAY_MASK_GROUP != 4u
+#error "kd_compute_split_masks_grouped holds the candidates of four references in two float16"
+#endif
 __kernel void kd_compute_split_masks_grouped(uint ref_begin, uint refs,
                                              __global const float* ref_box,
                                              __global const uint* ref_root,
@@ -113,7 +116,8 @@ __kernel void kd_compute_split_masks_grouped(uint ref_begin, uint refs,
     const uint in_batch = min(KDRAY_MASK_GROUP, refs - first);
     uint together = 1;
     while (together < in_batch && ref_root[ref + together] == root) ++together;
-    /* Lanes 8k.. of pos[k / 2]: reference k's candidates; past `together`, the last one's again. */
+    /* Lanes 8 (k % 2).. of pos[k / 2]: reference k's candidates; past `together`, the last one's
+     * again. */
     float8 candidates[KDRAY_MASK_GROUP];
     for (uint k = 0; k < KDRAY_MASK_GROUP; ++k)
         candidates[k] = kd_candidate_lanes(ref_box +

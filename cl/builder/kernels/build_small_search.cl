@@ -56,9 +56,9 @@ KDRAY_INLINE int kd_straddler_may_miss(KdBox b, KdBox node, uint axis) {
 /* The sides of one candidate plane per lane (at pos) that a box (lo, hi lanes) lies on, -1 where
  * true; planar_above: the lanes whose planar triangles go above (kd_compute_split_masks). A macro
  * over the vector width, for the float16 lanes of kd_compute_split_masks_grouped. */
-#define KDRAY_CANDIDATE_SIDES(crosses_up_type, pos, planar_above, lo, hi, below, above) \
+#define KDRAY_CANDIDATE_SIDES(mask_type, pos, planar_above, lo, hi, below, above) \
     do {                                                                             \
-        const crosses_up_type crosses_up_ = (hi) > (pos);                            \
+        const mask_type crosses_up_ = (hi) > (pos);                            \
         (above) = crosses_up_ | ((planar_above) & ((lo) >= (pos)));                  \
         (below) = ((lo) < (pos)) | (~(planar_above) & ~crosses_up_);                 \
     } while (0)
