@@ -39,9 +39,12 @@ std::size_t prewarm_build_buffers(ClDevice& device, std::size_t triangles);
 /// small scenes.
 KdTree prewarm_host_tree(std::size_t triangles);
 
-/// A closed surface: a unit UV sphere of 2 * rings * segments triangles (the warm-up's scene, and
-/// a test's).
+/// A closed surface: a unit UV sphere of 2 * rings * segments triangles (tests' scenes).
 Scene uv_sphere(int rings, int segments);
+
+/// A closed surface without high-valence vertices: a unit sphere of 12 n^2 triangles, each face of
+/// a cube cut n x n and pushed out onto the sphere (the warm-up's scene).
+Scene cube_sphere(int n);
 
 /// Builds a small generated scene with `params`, so that each of the builder's kernels has been
 /// launched once: a first launch costs more than a later one (PoCL compiles or loads the kernel's
