@@ -80,7 +80,7 @@ std::vector<cl_uint> arena_starts(const std::vector<cl_uint>& refs, std::uint64_
 struct Arenas {
     DeviceArray start, work_tri, work_box, records, roots, small_tri, small_box, leaf_refs, stacks,
         counts;
-    cl_uint items = 0;
+    cl_uint item_count = 0;  // deep roots the run built
 };
 
 cl_uint arena_total(const std::vector<cl_uint>& start, unsigned kind, std::size_t nodes) {
@@ -118,7 +118,10 @@ DepthFirstResult build_depth_first(BuildContext& ctx, const TriangleBounds& tria
      * runs again for those subtrees alone (it only reads the deep roots). Real scenes fit at the
      * first run; input whose splits cut most triangles fills arenas of any size made from the
      * root's size alone (the per-depth budget bounds each depth, not their sum), and takes a few
-     * runs. Each run's arenas are kept until its subtrees are committed. */
+     * runs. Each run's arenas are kept until its subtrees are committed: on such input the peak
+     * holds a kept run's arenas of the subtrees that ran out in it too (their kinds that did not
+     * run out, not grown, once more per run), which committing each run's subtrees at once would
+     * spare; real scenes make one run. */
     const int shift = -int(arena_shift);
     std::vector<std::array<int, KDRAY_DF_KINDS>> grow(nodes, {0, shift, shift, shift, shift});
     std::vector<cl_uint> counts(nodes * KDRAY_DF_COUNTS);  // of every subtree, from its last run
@@ -131,7 +134,7 @@ DepthFirstResult build_depth_first(BuildContext& ctx, const TriangleBounds& tria
         const std::vector<cl_uint> start =
             arena_starts(refs, cl_uint(p.large_node_threshold), grow, items);
         Arenas& a = runs.emplace_back();
-        a.items = cl_uint(items.size());
+        a.item_count = cl_uint(items.size());
         a.start = ctx.allocate<cl_uint>(start.size(), "depth-first arena starts");
         ctx.write(a.start, start);
         const std::size_t work = arena_total(start, KDRAY_DF_WORK, nodes);
@@ -149,13 +152,13 @@ DepthFirstResult build_depth_first(BuildContext& ctx, const TriangleBounds& tria
         a.stacks =
             ctx.allocate<KdDepthFirstTask>(items.size() * KDRAY_DF_STACK, "depth-first stacks");
         a.counts = ctx.allocate<cl_uint>(items.size() * KDRAY_DF_COUNTS, "depth-first counts");
-        enqueue_per_item(ctx.device, ctx.kernels.build_depth_first, items.size(), args, a.items,
-                         deep.node.buffer(), deep.ref_start.buffer(), deep.ref_count.buffer(),
-                         deep.ref_tri.buffer(), deep.ref_box.buffer(), triangles.triangles.buffer(),
-                         a.start.buffer(), a.work_tri.buffer(), a.work_box.buffer(),
-                         a.records.buffer(), a.roots.buffer(), a.small_tri.buffer(),
-                         a.small_box.buffer(), a.leaf_refs.buffer(), a.stacks.buffer(),
-                         a.counts.buffer());
+        enqueue_per_item(ctx.device, ctx.kernels.build_depth_first, a.item_count, args,
+                         a.item_count, deep.node.buffer(), deep.ref_start.buffer(),
+                         deep.ref_count.buffer(), deep.ref_tri.buffer(), deep.ref_box.buffer(),
+                         triangles.triangles.buffer(), a.start.buffer(), a.work_tri.buffer(),
+                         a.work_box.buffer(), a.records.buffer(), a.roots.buffer(),
+                         a.small_tri.buffer(), a.small_box.buffer(), a.leaf_refs.buffer(),
+                         a.stacks.buffer(), a.counts.buffer());
         std::vector<cl_uint> run_counts(items.size() * KDRAY_DF_COUNTS);
         ctx.device.read(a.counts.buffer(), 0, run_counts.size() * sizeof(cl_uint),
                         run_counts.data(), "reading the depth-first subtrees' counts");
@@ -208,8 +211,8 @@ DepthFirstResult build_depth_first(BuildContext& ctx, const TriangleBounds& tria
     output.regions = ctx.allocate<KdLargeRegion>(nodes, "depth-first subtrees");
     // Each run commits the subtrees that fit in its arenas.
     for (const Arenas& a : runs)
-        enqueue_per_item(ctx.device, ctx.kernels.commit_depth_first, a.items, cl_uint(nodes),
-                         a.items, a.start.buffer(), a.counts.buffer(), base_array.buffer(),
+        enqueue_per_item(ctx.device, ctx.kernels.commit_depth_first, a.item_count, cl_uint(nodes),
+                         a.item_count, a.start.buffer(), a.counts.buffer(), base_array.buffer(),
                          deep.node.buffer(), a.records.buffer(), a.roots.buffer(),
                          a.small_tri.buffer(), a.small_box.buffer(), a.leaf_refs.buffer(),
                          output.records.buffer(), small.roots.buffer(), small.ref_tri.buffer(),

@@ -254,8 +254,9 @@ typedef struct KdLargeLevelArgs {
 #define KDRAY_DF_BUDGET_LEAVES 5u
 #define KDRAY_DF_COUNTS 6u
 
-/* KdDepthFirstArgs — 32 bytes. kd_build_large_depth_first's scalars: its work-items (the deep
- * roots, one each), the depth limit, the large-node threshold T, empty_ratio C_e, the SAH
+/* KdDepthFirstArgs — 32 bytes. kd_build_large_depth_first's scalars: the deep roots (the length
+ * of the arena starts' rows; a run's work-items are its items, build_large_depth_first.cl), the
+ * depth limit, the large-node threshold T, empty_ratio C_e, the SAH
  * costs C_t, C_i and the empty-space bonus; ref_budget, the most references a subtree's nodes of
  * one depth may hold per reference of its root (the levels' budget per triangle). */
 typedef struct KdDepthFirstArgs {

@@ -17,10 +17,12 @@
  * On the 2-core PoCL CPU device the large stage takes 0.67-0.82 of the chunked levels' time
  * (docs/large-stage.md, measured at a54da79).
  *
- *   kd_build_large_depth_first   per deep root: its subtree's records, small roots (and their
- *                                references) and leaf references, in arenas of its own
- *   kd_commit_depth_first        per deep root: the arenas copied into the build's stores, ids
- *                                made global, and its KdLargeRegion for the output stage
+ *   kd_build_large_depth_first   per deep root of the run: its subtree's records, small roots
+ *                                (and their references) and leaf references, in arenas of its
+ *                                own
+ *   kd_commit_depth_first        per deep root of a run that fitted: the arenas copied into the
+ *                                build's stores, ids made global, and its KdLargeRegion for the
+ *                                output stage
  *
  * Workspace of an item, [0, cap): a stack of reference ranges, a node's range on top. Splitting
  * the top node [b, b + n) writes its below references in place (a reference goes below at most
