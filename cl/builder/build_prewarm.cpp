@@ -131,15 +131,14 @@ Scene cube_sphere(int n) {
         const double length = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
         tris.insert(tris.end(), {float(p[0] / length), float(p[1] / length), float(p[2] / length)});
     };
+    // The two triangles of cell (i, j): its corners' offsets, in order.
+    constexpr int kCellCorners[6][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 0}, {1, 1}, {0, 1}};
     for (int axis = 0; axis < 3; ++axis)
         for (double sign : {-1.0, 1.0})
             for (int i = 0; i < n; ++i)
-                for (int j = 0; j < n; ++j) {
-                    point(axis, sign, i, j), point(axis, sign, i + 1, j),
-                        point(axis, sign, i + 1, j + 1);
-                    point(axis, sign, i, j), point(axis, sign, i + 1, j + 1),
-                        point(axis, sign, i, j + 1);
-                }
+                for (int j = 0; j < n; ++j)
+                    for (const auto& corner : kCellCorners)
+                        point(axis, sign, i + corner[0], j + corner[1]);
     return make_scene(std::move(tris), "cube sphere");
 }
 
