@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <string>
 
 #include "core/error.h"
@@ -467,4 +468,24 @@ TEST_CASE("the shared scenes load with SOURCES.md's triangle counts") {
     CHECK(sponza.warnings.front().find("20 material(s) set both d and Tr") != std::string::npos);
     for (std::size_t i = 1; i < sponza.warnings.size(); ++i)
         CHECK(sponza.warnings[i].find(" is not simulated (") != std::string::npos);
+}
+
+TEST_CASE("Scene::bounds: the box of every vertex, an empty box without triangles") {
+    CHECK(Scene{}.bounds().empty());
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> coordinate(-1000.0f, 1000.0f);
+    for (std::size_t count : {1u, 2u, 3u, 7u, 64u, 1001u}) {
+        Scene scene;
+        scene.triangles.resize(count * KDRAY_FLOATS_PER_TRIANGLE);
+        for (float& x : scene.triangles) x = coordinate(rng);
+        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (std::size_t i = 0; i < scene.triangles.size(); ++i) {
+            lo[i % 3] = std::fmin(lo[i % 3], scene.triangles[i]);
+            hi[i % 3] = std::fmax(hi[i % 3], scene.triangles[i]);
+        }
+        const Aabb b = scene.bounds();
+        CAPTURE(count);
+        CHECK(b.lo == Vec3{lo[0], lo[1], lo[2]});
+        CHECK(b.hi == Vec3{hi[0], hi[1], hi[2]});
+    }
 }

@@ -1,7 +1,9 @@
 #include "core/scene/scene.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 #include "core/error.h"
 
@@ -42,9 +44,26 @@ Vec3 Material::transmission_filter() const {
 }
 
 Aabb Scene::bounds() const {
+    // A running bound per float of a triangle (each corner's x, y, z), folded at the end: one
+    // running bound per axis made every vertex wait for the one before (the OpenCL build computes
+    // this on the host first; 1.6 ms of a 43 ms Kitchen build), these are independent and vector
+    // wide.
+    constexpr std::size_t kFloats = KDRAY_FLOATS_PER_TRIANGLE;
+    std::array<float, kFloats> lo, hi;
+    lo.fill(std::numeric_limits<float>::infinity());
+    hi.fill(-std::numeric_limits<float>::infinity());
+    const float* t = triangles.data();
+    for (std::size_t i = 0; i + kFloats <= triangles.size(); i += kFloats)
+        for (std::size_t k = 0; k < kFloats; ++k) {
+            lo[k] = std::min(lo[k], t[i + k]);
+            hi[k] = std::max(hi[k], t[i + k]);
+        }
     Aabb b;
-    for (std::size_t i = 0; i + 2 < triangles.size(); i += 3)
-        b.grow({triangles[i], triangles[i + 1], triangles[i + 2]});
+    if (triangles.size() < kFloats) return b;
+    for (std::size_t k = 0; k < kFloats; k += 3) {
+        b.grow(Vec3{lo[k], lo[k + 1], lo[k + 2]});
+        b.grow(Vec3{hi[k], hi[k + 1], hi[k + 2]});
+    }
     return b;
 }
 
