@@ -6,13 +6,14 @@ environment that script makes (PyPI's `mitsuba`); it is not meant to be run by h
     mitsuba_side.py compare A.exr B.exr        # prints {"rel_mse": ..., "mean_a": ..., ...}
 
 SPEC: {"obj": PATH, "render_file": {...kdray's render file...}, "spp": N, "max_depth": D,
-"variant": "llvm_ad_rgb" | "scalar_rgb", "work": DIR}. The scene is kdray's, mapped as
-../shared/conventions.md says comparisons do: the camera model (`perspective`, `fov_axis` y),
-the `path` integrator at the same max_depth, `diffuse` (two-sided: kdray shades both sides) for
+"rr_depth": R (Mitsuba's; 5, its default, when absent), "variant": "llvm_ad_rgb" | "scalar_rgb",
+"work": DIR}. The scene is kdray's, mapped as ../shared/conventions.md says comparisons do: the
+camera model (`perspective`, `fov_axis` y), the `path` integrator at the same max_depth (and
+Russian roulette after rr_depth segments), `diffuse` (two-sided: kdray shades both sides) for
 Lambertian materials with their `map_Kd`, `conductor` for mirrors (illum 3, 5 with Ks),
-`dielectric` for glass (illum 4, 6, 7; d < 1; 0 < Tf < 1) with Ni, and one-sided `area`
-emitters for triangles with Ke. The render file's point and directional lights become `point`
-and `directional` emitters; its background a `constant` emitter. kdray's Phong lobe (Ks, Ns on a
+`dielectric` for glass (illum 4, 6, 7; d < 1; 0 < Tf < 1) with Ni, and one-sided `area` emitters
+for triangles with Ke. The render file's point and directional lights become `point` and
+`directional` emitters; its background a `constant` emitter. kdray's Phong lobe (Ks, Ns on a
 non-mirror) has no counterpart there: such a material is reported in "approximations".
 """
 import json
@@ -148,7 +149,8 @@ def scene_dict(spec, mi):
     width, height = int(image.get("width", 640)), int(image.get("height", 480))
     scene = {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": int(spec["max_depth"])},
+        "integrator": {"type": "path", "max_depth": int(spec["max_depth"]),
+                       "rr_depth": int(spec.get("rr_depth", 5))},
         "sensor": {
             "type": "perspective",
             "fov_axis": "y",
