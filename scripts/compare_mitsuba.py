@@ -240,7 +240,7 @@ def main():
             f"commit {record['commit']}, {record['date']}, {record['machine']}. Integrator "
             f"`{args.integrator}`, max_depth {args.max_depth} (Mitsuba's rr_depth {rr_depth}: "
             "Russian roulette after as many segments as kdray's, where its default of 5 leaves "
-            "every path of 5 segments whole), {args.size}x{args.size} at "
+            f"every path of 5 segments whole), {args.size}x{args.size} at "
             f"{args.spp} spp on both sides; {MITSUBA} from PyPI. Relative MSE: the mean over "
             "pixels and channels of (kdray - Mitsuba)^2 / (Mitsuba^2 + 0.01), both linear EXRs, "
             "so it holds both sides' noise. Times: kdray's trace time of the frame (warm: after "
