@@ -115,8 +115,8 @@ TEST_CASE(
         BuildParams median;
         median.large_split_bins = 0;
         check_same_as_chunked(scene, name + "_median", median, expect);
-        // 16 bins: the other width whose counts the CPU shapes keep in vector registers
-        // (kd_bin_references); the level shape counts them with local atomics.
+        // 16 bins: kd_bin_references' counts in memory (low's 8 are in vector registers)
+        // against the level shape's local atomics.
         BuildParams sixteen = with_build_quality({}, BuildQuality::Low);
         sixteen.large_split_bins = 16;
         check_same_as_chunked(scene, name + "_16_bins", sixteen, expect);
