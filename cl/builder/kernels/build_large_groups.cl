@@ -91,9 +91,8 @@ __kernel void kd_reduce_box_chunk_groups(__global const float* ref_box,
 #if KDRAY_LARGE_BINS > 0
 /* kd_bin_large_chunks in this shape: chunk c's SAH bins, counted in local memory. */
 __kernel void kd_bin_large_groups(__global const float* ref_box, __global const uint* node_start,
-                                  __global const uint* node_count,
-                                  __global const uint* node_chunk, uint nodes,
-                                  __global const KdLargeNode* node,
+                                  __global const uint* node_count, __global const uint* node_chunk,
+                                  uint nodes, __global const KdLargeNode* node,
                                   __global const float* tight_box, __global uint* chunk_bins) {
     __local uint counts[KDRAY_BIN_VALUES];
     const uint c = get_group_id(0), l = get_local_id(0), g = get_local_size(0);
@@ -102,9 +101,7 @@ __kernel void kd_bin_large_groups(__global const float* ref_box, __global const 
     uint begin, end;
     const uint i = kd_chunk_references(c, node_start, node_count, node_chunk, nodes, &begin, &end);
     const KdBox tight = kd_bin_box(kd_box_of(node[i].box), tight_box, i);
-    const float4 extent = (float4)(tight.hi - tight.lo, 0.0f);
-    const float4 scale =
-        select((float4)(0.0f), (float)KDRAY_LARGE_BINS / extent, extent > (float4)(0.0f));
+    const float4 scale = kd_bin_scale(tight, KDRAY_LARGE_BINS);
     const float4 lo = (float4)(tight.lo, 0.0f);
     for (uint r = begin + l; r < end; r += g) {
         uint4 lo_bin, hi_bin;
@@ -137,15 +134,12 @@ __kernel void kd_sum_node_bins(__global const uint* node_chunk, uint nodes,
 
 /* kd_classify_chunks in this shape: each work-item classifies its references (one per round),
  * and the group adds up the chunk's counts below and above. */
-__kernel void kd_classify_chunk_groups(KdLargeLevelArgs a, __global const uint* node_ref_start,
-                                       __global const uint* node_ref_count,
-                                       __global const uint* node_chunk,
-                                       __global const uint* ref_tri, __global const float* ref_box,
-                                       __global const float* triangles,
-                                       __global const KdLargeNode* large_node,
-                                       __global const KdLargeSplit* node_split,
-                                       __global uchar* ref_sides, __global float* child_box,
-                                       __global uint* chunk_counts) {
+__kernel void kd_classify_chunk_groups(
+    KdLargeLevelArgs a, __global const uint* node_ref_start, __global const uint* node_ref_count,
+    __global const uint* node_chunk, __global const uint* ref_tri, __global const float* ref_box,
+    __global const float* triangles, __global const KdLargeNode* large_node,
+    __global const KdLargeSplit* node_split, __global uchar* ref_sides, __global float* child_box,
+    __global uint* chunk_counts) {
     __local uint sum[2];
     const uint c = get_group_id(0), l = get_local_id(0), g = get_local_size(0);
     if (l < 2) sum[l] = 0;

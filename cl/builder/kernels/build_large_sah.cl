@@ -12,27 +12,18 @@
  *
  * Counts come per reduction chunk (at most KDRAY_REDUCE_CHUNK references of one node), in
  * chunk_bins[chunk][axis][side][bin]: side 0 counts the references whose lo falls in the bin,
- * side 1 those whose hi does. */
+ * side 1 those whose hi does. The bins and the plane's price are build_binned_sah.cl's, which the
+ * small stage's binned search (build_small_bins.cl) shares. */
 #ifndef KDRAY_BUILD_LARGE_SAH_CL
 #define KDRAY_BUILD_LARGE_SAH_CL
 
-#include "cl/builder/kernels/build_common.cl"
+#include "cl/builder/kernels/build_binned_sah.cl"
 
 #define KDRAY_BIN_VALUES (KDRAY_BIN_COUNTS * KDRAY_LARGE_BINS)
 
-/* Bins of a reference's lo and hi on the three axes (lane 3 unused) of a tight box starting at
- * lo, with bins / extent in scale. A value exactly on a bin boundary b lies on the plane between
- * bins b - 1 and b, which it must not cross: a lo there goes to bin b (not below the plane), a hi
- * to bin b - 1 (not above it), the bin of the float just before it. Conversions saturate, so
- * values before the box fall in bin 0; vector conversions, not floor and ceil, which PoCL left
- * as branchy scalar code (the kernel then took 40% of a Kitchen build). */
+/* kd_bins_of at the program's KDRAY_LARGE_BINS. */
 KDRAY_INLINE void kd_large_bins(KdBox b, float4 lo, float4 scale, uint4* lo_bin, uint4* hi_bin) {
-    const uint4 last = (uint4)(KDRAY_LARGE_BINS - 1);
-    const float4 f_lo = ((float4)(b.lo, 0.0f) - lo) * scale;
-    const float4 f_hi = ((float4)(b.hi, 0.0f) - lo) * scale;
-    const float4 before_hi = select((float4)(0.0f), as_float4(as_int4(f_hi) - 1), f_hi > 0.0f);
-    *lo_bin = min(convert_uint4_sat_rtz(f_lo), last);
-    *hi_bin = min(convert_uint4_sat_rtz(before_hi), last);
+    kd_bins_of(b, lo, scale, KDRAY_LARGE_BINS, lo_bin, hi_bin);
 }
 
 /* counts[KDRAY_BIN_VALUES]: the bins of boxes[begin .. end) over `tight` (both large stages: a
@@ -44,9 +35,7 @@ KDRAY_INLINE void kd_large_bins(KdBox b, float4 lo, float4 scale, uint4* lo_bin,
  * kernel's no fewer (its time is elsewhere). */
 KDRAY_INLINE void kd_bin_references(__global const float* boxes, uint begin, uint end, KdBox tight,
                                     uint* counts) {
-    const float4 extent = (float4)(tight.hi - tight.lo, 0.0f);
-    const float4 scale =
-        select((float4)(0.0f), (float)KDRAY_LARGE_BINS / extent, extent > (float4)(0.0f));
+    const float4 scale = kd_bin_scale(tight, KDRAY_LARGE_BINS);
     const float4 lo = (float4)(tight.lo, 0.0f);
 #if KDRAY_LARGE_BINS == 8
     const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
@@ -95,10 +84,10 @@ KDRAY_INLINE int kd_best_binned_plane(KdBox box, KdBox tight, const uint* counts
                                       float cost_traversal, float cost_intersection,
                                       float empty_bonus, uint* axis, float* pos);
 
-KDRAY_INLINE int kd_best_large_split(KdBox box, KdBox tight, __global const uint* bins,
-                                     uint first, uint end, uint count,
-                                     float cost_traversal, float cost_intersection,
-                                     float empty_bonus, uint* axis, float* pos) {
+KDRAY_INLINE int kd_best_large_split(KdBox box, KdBox tight, __global const uint* bins, uint first,
+                                     uint end, uint count, float cost_traversal,
+                                     float cost_intersection, float empty_bonus, uint* axis,
+                                     float* pos) {
     uint counts[KDRAY_BIN_VALUES];
     for (uint k = 0; k < KDRAY_BIN_VALUES; ++k) counts[k] = 0;
     for (uint c = first; c < end; ++c) {
@@ -114,35 +103,7 @@ KDRAY_INLINE int kd_best_large_split(KdBox box, KdBox tight, __global const uint
 KDRAY_INLINE int kd_best_binned_plane(KdBox box, KdBox tight, const uint* counts, uint count,
                                       float cost_traversal, float cost_intersection,
                                       float empty_bonus, uint* axis, float* pos) {
-    const float3 e = box.hi - box.lo;
-    const float cost_scale = cost_intersection / kd_box_area(box);
-    float best = INFINITY;
-    for (uint a = 0; a < 3; ++a) {
-        const float lo = kd_axis_of(box.lo, a), hi = kd_axis_of(box.hi, a);
-        const float t_lo = kd_axis_of(tight.lo, a), t_hi = kd_axis_of(tight.hi, a);
-        const float e1 = kd_axis_of(e, (a + 1) % 3), e2 = kd_axis_of(e, (a + 2) % 3);
-        const float cross = e1 * e2, ring = e1 + e2;
-        uint below = 0, above = count;
-        for (uint b = 0; b <= KDRAY_LARGE_BINS; ++b) {
-            /* The plane between bins b - 1 and b: below gains bin b - 1's starts, above has lost
-             * the ends before bin b. */
-            if (b > 0) {
-                below += counts[(2 * a) * KDRAY_LARGE_BINS + b - 1];
-                above -= counts[(2 * a + 1) * KDRAY_LARGE_BINS + b - 1];
-            }
-            const float p = b == 0 ? t_lo
-                            : b == KDRAY_LARGE_BINS
-                                ? t_hi
-                                : t_lo + (t_hi - t_lo) * ((float)b / (float)KDRAY_LARGE_BINS);
-            if (!(p > lo && p < hi)) continue;
-            float cost = cost_traversal +
-                         cost_scale * 2.0f *
-                             ((float)below * (cross + (p - lo) * ring) +
-                              (float)above * (cross + (hi - p) * ring));
-            if (below == 0 || above == 0) cost *= 1.0f - empty_bonus;
-            if (cost < best) best = cost, *axis = a, *pos = p;
-        }
-    }
-    return best < INFINITY;
+    return kd_cheapest_binned_plane(box, tight, counts, KDRAY_LARGE_BINS, count, cost_traversal,
+                                    cost_intersection, empty_bonus, axis, pos) < INFINITY;
 }
 #endif /* KDRAY_BUILD_LARGE_SAH_CL */
