@@ -34,6 +34,7 @@ nlohmann::json defaults_json(const BuilderOptions& o) {
             {"large_split_bins", p.large_split_bins},
             {"small_reclip_refs", p.small_reclip_refs},
             {"small_leaf_refs", p.small_leaf_refs},
+            {"small_split_bins", p.small_split_bins},
             {"small_stage", small_stage_name(p.small_stage)},
             {"large_stage", large_stage_name(p.large_stage)},
             {"empty_bonus", p.empty_bonus},

@@ -19,7 +19,7 @@ struct BuilderOptions {
     std::string quality;             // low, medium, high; empty: the command's default
     // Set by the user apart from the quality (--large-split-bins, --small-reclip-refs,
     // --small-leaf-refs).
-    std::optional<int> large_split_bins, small_reclip_refs, small_leaf_refs;
+    std::optional<int> large_split_bins, small_reclip_refs, small_leaf_refs, small_split_bins;
     std::string small_stage = "auto";  // --small-stage: small_stage_name's names (main.cpp checks)
     std::string large_stage = "auto";  // --large-stage: large_stage_name's names (main.cpp checks)
     std::string retired_max_depth;     // `--max-depth`, refused by its check (main.cpp)
@@ -33,7 +33,7 @@ struct BuildCommand {
     std::string scene;
     std::string output;  // tree file, optional
     bool json = false;
-    int repeat = 1;  // > 1: one warm-up build, then this many timed builds, median reported
+    int repeat = 1;       // > 1: one warm-up build, then this many timed builds, median reported
     bool strict = false;  // any warning is an error
     BuilderOptions builder;
 };

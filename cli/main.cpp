@@ -104,6 +104,11 @@ void add_builder_options(CLI::App& app, BuilderOptions& o) {
                    "OpenCL builder: a small node of at most this many triangles is a leaf "
                    "without an SAH search (0: search every node). Default: by --quality")
         ->check(CLI::Range(0, KDRAY_SMALL_ROOT_MAX_REFS));
+    app.add_option("--small-split-bins,--small-bins", o.small_split_bins,
+                   "OpenCL builder: split a small node at the cheapest by the SAH of this many "
+                   "bins per axis of its tight box, without split-candidate masks; 0: price every "
+                   "candidate exactly (Zhou et al.). Default: by --quality")
+        ->check(CLI::Range(0, int(KDRAY_SMALL_MAX_BINS)));
     app.add_option("--small-stage", o.small_stage,
                    "OpenCL builder: how the small-node stage runs, for the same tree: per-root "
                    "(a work-item builds a small root's whole subtree; CPU devices), per-level "

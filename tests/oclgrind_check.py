@@ -297,6 +297,12 @@ CASES = {
     "coincident-low-per-level": ("coincident", ["--quality", "low", "--small-stage", "per-level"]),
     "coincident-medium-per-root": ("coincident", ["--quality", "medium", "--small-stage",
                                                   "per-root", "--large-stage", "chunked"]),
+    # Binned small nodes (no split masks): per level above the re-clipped tables of long
+    # slivers, and per root down to the coincident faces' planar triangles.
+    "slivers-binned-per-level": ("slivers", ["--quality", "high", "--small-bins", "8",
+                                             "--small-stage", "per-level"]),
+    "coincident-binned-per-root": ("coincident", ["--quality", "low", "--small-bins", "16",
+                                                  "--small-stage", "per-root"]),
     # Work-groups of 64: the element-parallel large stage walks each 256-reference chunk in four
     # rounds, its scans carried from round to round.
     "clusters-level-groups-of-64": ("clusters", ["--quality", "high", "--large-stage", "level"],

@@ -62,6 +62,7 @@ TEST_CASE("every tree parameter in stats.json has the option of its name, and ol
                                            {"large_split_bins", "--large-bins", "5"},
                                            {"small_reclip_refs", "--reclip-refs", "3"},
                                            {"small_leaf_refs", "--leaf-refs", "2"},
+                                           {"small_split_bins", "--small-bins", "4"},
                                            {"empty_bonus", "", "0.375"},
                                            {"tree_depth", "", "11"}}) {
         CAPTURE(c.key);

@@ -28,13 +28,14 @@ TEST_CASE("--quality: the ladder's parameters, each command's default, options s
     write_obj(dir / "in" / "frame_2.obj", scene);
     const fs::path render = write_text_file(dir / "render.json", kSmallRender);
     auto ladder = [](const nlohmann::json& params) {
-        return std::vector<int>{params["large_split_bins"].get<int>(),
-                                params["small_reclip_refs"].get<int>(),
-                                params["small_leaf_refs"].get<int>()};
+        return std::vector<int>{
+            params["large_split_bins"].get<int>(), params["small_reclip_refs"].get<int>(),
+            params["small_leaf_refs"].get<int>(), params["small_split_bins"].get<int>()};
     };
     auto level = [](BuildQuality q) {
         const BuildParams p = with_build_quality({}, q);
-        return std::vector<int>{p.large_split_bins, p.small_reclip_refs, p.small_leaf_refs};
+        return std::vector<int>{p.large_split_bins, p.small_reclip_refs, p.small_leaf_refs,
+                                p.small_split_bins};
     };
     auto build_json = [&](std::vector<std::string> extra) {
         std::vector<std::string> args = {"build", obj.string(), "--json"};
@@ -59,6 +60,16 @@ TEST_CASE("--quality: the ladder's parameters, each command's default, options s
     CHECK(j["quality"] == "custom");
     CHECK(j["params"]["small_leaf_refs"] == 2);
     CHECK(j["params"]["large_split_bins"] == level(BuildQuality::Low)[0]);
+    // Binned small nodes: off the ladder, saved in the tree file and read back from it.
+    const CommandResult saved =
+        run_kdray({"build", obj.string(), "--json", "--quality", "low", "--small-bins", "8", "-o",
+                   (dir / "binned.kdt").string()});
+    REQUIRE_MESSAGE(saved.status == 0, saved.err);
+    CHECK(nlohmann::json::parse(saved.out)["quality"] == "custom");
+    CHECK(read_tree_file(dir / "binned.kdt").tree.params.small_split_bins == 8);
+    const CommandResult read_back = run_kdray({"stats", (dir / "binned.kdt").string(), "--json"});
+    REQUIRE_MESSAGE(read_back.status == 0, read_back.err);
+    CHECK(nlohmann::json::parse(read_back.out)["tree"]["params"]["small_split_bins"] == 8);
     // render: several frames get the animation default, one frame the static one.
     const fs::path out = dir / "out";
     CommandResult r = run_kdray({"render", (dir / "in" / "frame_1.obj").string(),

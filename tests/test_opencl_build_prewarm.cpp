@@ -74,45 +74,50 @@ TEST_CASE("opencl builder: a first build takes the buffers made ahead for its tr
         Scene scene;
         bool estimated;  // of the shapes the estimate is for
     };
-    for (const Case& c :
-         {Case{build_detail::uv_sphere(100, 100), true}, Case{floor_and_boxes(60, 600), true},
-          Case{random_slivers(6000), false}}) {
-        const Scene& scene = c.scene;
-        CAPTURE(scene.path);
-        const std::size_t n = scene.triangle_count();
-        REQUIRE(!build_detail::expected_build_buffers(n).empty());
+    // The default, and binned small nodes, which make no split masks (nor expect any).
+    BuildParams binned;
+    binned.small_split_bins = 8;
+    for (const Case& c : {Case{build_detail::uv_sphere(100, 100), true},
+                          Case{floor_and_boxes(60, 600), true}, Case{random_slivers(6000), false}})
+        for (const BuildParams& params : {BuildParams{}, binned}) {
+            const Scene& scene = c.scene;
+            CAPTURE(scene.path);
+            CAPTURE(params.small_split_bins);
+            const std::size_t n = scene.triangle_count();
+            REQUIRE(!build_detail::expected_build_buffers(n, params).empty());
 
-        device.buffer_pool().clear();
-        std::uint64_t before = device.allocated_bytes();
-        BuildReport cold;
-        const KdTree cold_tree = build_opencl(device, scene, {}, &cold);
-        const std::uint64_t cold_allocated = device.allocated_bytes() - before;
+            device.buffer_pool().clear();
+            std::uint64_t before = device.allocated_bytes();
+            BuildReport cold;
+            const KdTree cold_tree = build_opencl(device, scene, params, &cold);
+            const std::uint64_t cold_allocated = device.allocated_bytes() - before;
 
-        device.buffer_pool().clear();
-        const std::size_t made = build_detail::prewarm_build_buffers(device, n);
-        before = device.allocated_bytes();
-        BuildReport ready;
-        const KdTree ready_tree = build_opencl(device, scene, {}, &ready);
-        const std::uint64_t ready_allocated = device.allocated_bytes() - before;
-        device.buffer_pool().clear();
+            device.buffer_pool().clear();
+            const std::size_t made = build_detail::prewarm_build_buffers(device, n, params);
+            before = device.allocated_bytes();
+            BuildReport ready;
+            const KdTree ready_tree = build_opencl(device, scene, params, &ready);
+            const std::uint64_t ready_allocated = device.allocated_bytes() - before;
+            device.buffer_pool().clear();
 
-        INFO("triangles " << n << ", made ahead " << made << ", allocated without "
-                          << cold_allocated << " and with " << ready_allocated << ", peak "
-                          << cold.device_bytes << " and " << ready.device_bytes);
-        // The buffers made ahead are most of what a first build would make: when a size is off
-        // (a request above a buffer, or under half of it) the build makes its own again. With
-        // the growing arrays made ahead too, the sphere and the floor make 6.5% of it; the masks
-        // and the first-pass records are each over a quarter of it, so that were either not
-        // taken, the build would make over 1/4 (with the masks and records alone, 47% and 52%).
-        if (c.estimated) CHECK(ready_allocated < cold_allocated / 5);
-        // Taken a little larger than asked for (up to twice, by another array when the sizes
-        // are off), they raise the peak: this sphere 12.8%, the floor 7.8% on the PoCL CPU
-        // device; a first `kdray build`'s device bytes per triangle rose 2% (Sponza) to 15%
-        // (the BART Robots) when the growing arrays joined the masks and records. The bound is
-        // that 15%.
-        CHECK(ready.device_bytes <= cold.device_bytes * 115 / 100);
-        test::check_same_tree(ready_tree, cold_tree, scene, 28);
-    }
+            INFO("triangles " << n << ", made ahead " << made << ", allocated without "
+                              << cold_allocated << " and with " << ready_allocated << ", peak "
+                              << cold.device_bytes << " and " << ready.device_bytes);
+            // The buffers made ahead are most of what a first build would make: when a size is off
+            // (a request above a buffer, or under half of it) the build makes its own again. With
+            // the growing arrays made ahead too, the sphere and the floor make 6.5% of it; the
+            // masks and the first-pass records are each over a quarter of it, so that were either
+            // not taken, the build would make over 1/4 (with the masks and records alone, 47% and
+            // 52%).
+            if (c.estimated) CHECK(ready_allocated < cold_allocated / 5);
+            // Taken a little larger than asked for (up to twice, by another array when the sizes
+            // are off), they raise the peak: this sphere 12.8%, the floor 7.8% on the PoCL CPU
+            // device; a first `kdray build`'s device bytes per triangle rose 2% (Sponza) to 15%
+            // (the BART Robots) when the growing arrays joined the masks and records. The bound is
+            // that 15%.
+            CHECK(ready.device_bytes <= cold.device_bytes * 115 / 100);
+            test::check_same_tree(ready_tree, cold_tree, scene, 28);
+        }
 }
 
 TEST_CASE("opencl builder: a run's builder makes the first build's buffers once") {
@@ -122,7 +127,7 @@ TEST_CASE("opencl builder: a run's builder makes the first build's buffers once"
     OpenClTreeBuilder builder(session, {});
     const std::size_t n = 20000;
     std::size_t expected = 0;
-    for (const build_detail::ExpectedBuffer& b : build_detail::expected_build_buffers(n))
+    for (const build_detail::ExpectedBuffer& b : build_detail::expected_build_buffers(n, {}))
         expected += b.bytes;
     REQUIRE(expected > 0);
     ClDevice& device = session.device();
@@ -137,8 +142,8 @@ TEST_CASE("opencl builder: a run's builder makes the first build's buffers once"
 }
 
 TEST_CASE("opencl builder: nothing is made ahead for a small scene") {
-    CHECK(build_detail::expected_build_buffers(0).empty());
-    CHECK(build_detail::expected_build_buffers(1000).empty());
+    CHECK(build_detail::expected_build_buffers(0, {}).empty());
+    CHECK(build_detail::expected_build_buffers(1000, {}).empty());
 }
 
 TEST_CASE("opencl builder: a build fills the host storage it is lent and builds the same tree") {
@@ -193,7 +198,7 @@ TEST_CASE("opencl builder: a small scene's first build finds its arrays left by 
     // the scene, so that the arrays it leaves in the pool fit the first build's.
     const Scene scene = floor_and_boxes(30, 100);
     const std::size_t n = scene.triangle_count();
-    REQUIRE(build_detail::expected_build_buffers(n).empty());
+    REQUIRE(build_detail::expected_build_buffers(n, {}).empty());
     DeviceSession session("");
     ClDevice& device = session.device();
     std::uint64_t before = device.allocated_bytes();

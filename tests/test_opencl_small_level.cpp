@@ -90,6 +90,28 @@ TEST_CASE("opencl small stage: per-level builds the per-root trees at every buil
     check_same_as_per_root(test::random_triangles(2000, 21), "depth 6", shallow);
 }
 
+TEST_CASE("opencl small stage: per-level bins small nodes as per-root does, re-clipped or not") {
+    // Binned nodes (no masks) above the re-clip size, then the exact search over the re-clipped
+    // tables below it; with no re-clipping, bins all the way down, flat faces and planar
+    // triangles included.
+    for (int reclip : {0, 32}) {
+        BuildParams params;
+        params.small_split_bins = 8;
+        params.small_reclip_refs = reclip;
+        const std::string tag = " bins 8 reclip " + std::to_string(reclip);
+        for (std::uint32_t seed : {1u, 2u})
+            check_same_as_per_root(test::long_slivers(60, seed),
+                                   "long_slivers_" + std::to_string(seed) + tag, params);
+        check_same_as_per_root(test::planar_triangles(1500, 2), "planar" + tag, params);
+        check_same_as_per_root(test::cube_lattice(5), "cube_lattice" + tag, params);
+        check_same_as_per_root(scattered(), "scattered" + tag, params);
+    }
+    BuildParams params;
+    params.small_split_bins = 16;
+    for (const test::NamedScene& s : test::hard_scenes())
+        check_same_as_per_root(s.scene, s.name + " bins 16", params);
+}
+
 TEST_CASE("opencl small stage: per-level lays out batches and second-pass records as per-root") {
     // Batches of 16 KB of masks (tens of batches) and a first-pass scale of 1 (most subtrees
     // outgrow their first records): the per-level stage writes its records where the per-root

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <new>
+#include <string_view>
 
 #include "cl/runtime/cl_error.h"
 
@@ -59,16 +60,21 @@ constexpr PerTriangle kPerTriangle[] = {
 
 }  // namespace
 
-std::vector<ExpectedBuffer> expected_build_buffers(std::size_t triangles) {
+std::vector<ExpectedBuffer> expected_build_buffers(std::size_t triangles,
+                                                   const BuildParams& params) {
     std::vector<ExpectedBuffer> buffers;
     if (triangles < kPrewarmMinTriangles) return buffers;
-    for (const PerTriangle& p : kPerTriangle) buffers.push_back({p.what, p.bytes * triangles});
+    const std::string_view masks = "candidate masks";
+    for (const PerTriangle& p : kPerTriangle)
+        if (!(p.what == masks && params.small_split_bins > 0))
+            buffers.push_back({p.what, p.bytes * triangles});
     return buffers;
 }
 
-std::size_t prewarm_build_buffers(ClDevice& device, std::size_t triangles) {
+std::size_t prewarm_build_buffers(ClDevice& device, std::size_t triangles,
+                                  const BuildParams& params) {
     std::size_t made = 0;
-    for (const ExpectedBuffer& expected : expected_build_buffers(triangles)) {
+    for (const ExpectedBuffer& expected : expected_build_buffers(triangles, params)) {
         // A full pool releases its oldest buffers, the most valuable of these: stop before.
         if (made + expected.bytes > device.buffer_pool().capacity()) break;
         // A buffer the device could not make is one the build will fail to make too, with its

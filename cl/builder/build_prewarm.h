@@ -25,14 +25,16 @@ struct ExpectedBuffer {
     std::size_t bytes;
 };
 
-/// The buffers worth making ahead for a build of `triangles` triangles (none for small scenes,
-/// whose pages are few).
-std::vector<ExpectedBuffer> expected_build_buffers(std::size_t triangles);
+/// The buffers worth making ahead for a build of `triangles` triangles with `params` (none for
+/// small scenes, whose pages are few; no masks for binned small nodes, which make none).
+std::vector<ExpectedBuffer> expected_build_buffers(std::size_t triangles,
+                                                   const BuildParams& params);
 
-/// Makes expected_build_buffers(triangles) on `device`, enqueues a fill of each (without waiting:
-/// the device writes them while the host builds programs) and gives them to its BufferPool.
-/// Returns the bytes made.
-std::size_t prewarm_build_buffers(ClDevice& device, std::size_t triangles);
+/// Makes expected_build_buffers(triangles, params) on `device`, enqueues a fill of each (without
+/// waiting: the device writes them while the host builds programs) and gives them to its
+/// BufferPool. Returns the bytes made.
+std::size_t prewarm_build_buffers(ClDevice& device, std::size_t triangles,
+                                  const BuildParams& params);
 
 /// Host memory for the first build's downloaded tree (build_opencl's host_storage): vectors of
 /// the capacity a scene of `triangles` triangles needs, their pages written once, empty for

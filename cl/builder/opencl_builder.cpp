@@ -72,7 +72,7 @@ struct Build {
 
 void prepare_opencl_builder(ClDevice& device, const BuildParams& params, std::size_t triangles) {
     // First, so that the device fills the buffers while the host builds (or loads) programs.
-    prewarm_build_buffers(device, triangles);
+    prewarm_build_buffers(device, triangles, params);
     builder_kernels(device, supported_params(params).large_split_bins);
     const ClPrimitives primitives(device);
     if (triangles > 0) warm_up_launches(device, params, triangles);

@@ -26,18 +26,19 @@ KdSmallBatchArgs SmallBatch::args(const BuildParams& params, cl_uint second_pass
             params.empty_bonus,
             cl_uint(params.small_reclip_refs),
             cl_uint(params.small_leaf_refs),
-            0};
+            cl_uint(params.small_split_bins)};
 }
 
 namespace {
 
-/// The small roots in batches whose masks and first records (first_scale * (n + 1) per root of n
-/// references) take at most batch_bytes each: one batch unless the scene is huge. Splitting
-/// needs the roots' reference counts, read back only then.
+/// The small roots in batches whose masks (mask_bytes per reference) and first records
+/// (first_scale * (n + 1) per root of n references) take at most batch_bytes each: one batch
+/// unless the scene is huge. Splitting needs the roots' reference counts, read back only then.
 std::vector<SmallBatch> small_batches(BuildContext& ctx, const SmallRoots& small,
-                                      cl_uint first_scale, std::size_t batch_bytes) {
+                                      cl_uint first_scale, std::size_t batch_bytes,
+                                      std::size_t mask_bytes) {
     auto fits = [&](std::size_t refs, std::size_t roots) {
-        return refs * KDRAY_MASK_BYTES_PER_REF <= batch_bytes &&
+        return refs * mask_bytes <= batch_bytes &&
                first_scale * (refs + roots) * sizeof(KdSmallNode) <= batch_bytes;
     };
     std::vector<SmallBatch> batches(1);
@@ -63,7 +64,8 @@ std::vector<SmallBatch> small_batches(BuildContext& ctx, const SmallRoots& small
         // A root holds at most 64 references, so a batch of one always fits a sane limit.
         if (!fits(count, 1))
             throw Error("OpenCL kd-tree build: a small root's masks and records (" +
-                        std::to_string(count * KDRAY_MASK_BYTES_PER_REF) +
+                        std::to_string(count * mask_bytes +
+                                       first_scale * (count + 1) * sizeof(KdSmallNode)) +
                         " bytes) exceed the batch limit of " + std::to_string(batch_bytes) +
                         " bytes");
         ++batches.back().roots;
@@ -138,7 +140,11 @@ SmallSubtrees run_small_stage(BuildContext& ctx, const SmallRoots& small,
     out.leaf_refs = ctx.allocate<cl_uint>(roots, "subtree leaf references");
     if (small.count == 0) return out;
     checked_u32(KDRAY_CANDIDATE_STRIDE * std::size_t(small.refs), "split candidates");
-    out.batches = small_batches(ctx, small, first_scale, batch_bytes);
+    // Binned searches (build_small_bins.cl) read no masks: none are made, and a word stands in
+    // for the kernels' argument.
+    const bool masks = ctx.params.small_split_bins == 0;
+    out.batches =
+        small_batches(ctx, small, first_scale, batch_bytes, masks ? KDRAY_MASK_BYTES_PER_REF : 0);
 
     // The per-root kernel's totals (read once per batch).
     DeviceArray totals = ctx.allocate<cl_uint>(3, "small stage totals");
@@ -147,18 +153,21 @@ SmallSubtrees run_small_stage(BuildContext& ctx, const SmallRoots& small,
         // device's BufferPool: a fresh buffer this size (40 MB for the dragon) every frame was
         // 10k page faults on PoCL. The batch before's are released first, for this one to reuse.
         out.side_masks = DeviceArray();
-        out.side_masks = ctx.memory.allocate(std::size_t(batch.refs) * KDRAY_MASK_BYTES_PER_REF,
-                                             "candidate masks");
+        out.side_masks = ctx.memory.allocate(
+            masks ? std::size_t(batch.refs) * KDRAY_MASK_BYTES_PER_REF : sizeof(cl_ulong),
+            "candidate masks");
         // The masks in the shape of the stage's schedule: a work-item per reference for the
         // per-level (GPU) stage, per KDRAY_MASK_GROUP references for the per-root (CPU) one. A
         // GPU asked for per-root runs the grouped kernel too (inside docs/gpu-kernels.md's
         // budgets), and Oclgrind, a GPU, runs it in the per-root cases.
-        cl::Kernel& masks = per_level ? ctx.kernels.split_masks : ctx.kernels.split_masks_grouped;
+        cl::Kernel& mask_kernel =
+            per_level ? ctx.kernels.split_masks : ctx.kernels.split_masks_grouped;
         const std::size_t items =
             per_level ? batch.refs : (batch.refs + KDRAY_MASK_GROUP - 1) / KDRAY_MASK_GROUP;
-        enqueue_kernel(ctx.device, masks, items, batch.ref_begin, batch.refs,
-                       small.ref_box.buffer(), small.ref_root.buffer(), small.roots.buffer(),
-                       out.side_masks.buffer());
+        if (masks)
+            enqueue_kernel(ctx.device, mask_kernel, items, batch.ref_begin, batch.refs,
+                           small.ref_box.buffer(), small.ref_root.buffer(), small.roots.buffer(),
+                           out.side_masks.buffer());
         if (per_level)
             build_batch_levels(ctx, small, triangles, out, batch);
         else

@@ -37,6 +37,10 @@
  * BuildParams::small_reclip_refs. */
 #define KDRAY_RECLIP_REFS 32u
 
+/* Most bins per axis of the small stage's binned search (build_small_bins.cl): the size of its
+ * histograms, and so the largest BuildParams::small_split_bins. */
+#define KDRAY_SMALL_MAX_BINS 16u
+
 /* Empty-space cuts one large node may chain in one level (each side of its box at most once). */
 #define KDRAY_MAX_CUTS 6u
 
@@ -307,7 +311,9 @@ typedef struct KdLargeRegion {
  * rebuilds the subtrees that outgrew the first), the depth limit, the SAH costs C_t, C_i and the
  * empty-space bonus, the node size at or below which a node re-clips (reclip_refs, at most
  * KDRAY_RECLIP_REFS; 0: never) and at or below which it is a leaf without a search (leaf_size;
- * 0: every node is searched); pad 0. */
+ * 0: every node is searched), and small_bins: a node not on a re-clipped table is split by the
+ * binned SAH over this many bins per axis of its tight box (build_small_bins.cl; at most
+ * KDRAY_SMALL_MAX_BINS), 0 by the exact SAH over the split-candidate masks. */
 typedef struct KdSmallBatchArgs {
     kd_u32 root_begin;
     kd_u32 roots;
@@ -320,7 +326,7 @@ typedef struct KdSmallBatchArgs {
     kd_f32 empty_bonus;
     kd_u32 reclip_refs;
     kd_u32 leaf_size;
-    kd_u32 pad;
+    kd_u32 small_bins;
 } KdSmallBatchArgs;
 
 #ifndef KDRAY_DEVICE_CODE

@@ -73,6 +73,7 @@ nlohmann::json params_json(const KdTree& tree) {
         j["large_split_bins"] = p.large_split_bins;
         j["small_reclip_refs"] = p.small_reclip_refs;
         j["small_leaf_refs"] = p.small_leaf_refs;
+        j["small_split_bins"] = p.small_split_bins;
         j["small_stage"] = small_stage_name(p.small_stage);
         j["large_stage"] = large_stage_name(p.large_stage);
     }

@@ -91,6 +91,9 @@ void validate_build_params(const BuildParams& p) {
     if (p.small_leaf_refs < 0 || p.small_leaf_refs > KDRAY_SMALL_ROOT_MAX_REFS)
         reject("the small-node leaf size", "--small-leaf-refs/--leaf-refs", p.small_leaf_refs,
                integer_rule(0, KDRAY_SMALL_ROOT_MAX_REFS));
+    if (p.small_split_bins < 0 || p.small_split_bins > int(KDRAY_SMALL_MAX_BINS))
+        reject("the small-node SAH bins", "--small-split-bins/--small-bins", p.small_split_bins,
+               integer_rule(0, int(KDRAY_SMALL_MAX_BINS)));
     if (p.max_depth < 0 || p.max_depth > KDRAY_MAX_DEPTH)
         reject("the tree depth limit", "--tree-depth", p.max_depth,
                integer_rule(0, KDRAY_MAX_DEPTH));

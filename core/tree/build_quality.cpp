@@ -6,17 +6,19 @@ namespace {
 /// The ladder (docs/quality-ladder.md has the measurements behind each level). high is the
 /// builder at its best: exact SAH over every candidate, re-clipped small nodes. medium is high
 /// that stops searching nodes of 4 triangles or fewer (the deep levels hold most of the small
-/// stage's nodes); low stops at 8, never re-clips, and bins large nodes in 8 bins.
+/// stage's nodes); low stops at 8, never re-clips, and bins large nodes in 8 bins. No level bins
+/// small nodes (small_split_bins): on Kitchen and the bunny the binned search made 23-90% more
+/// nodes and a slower build than the exact one over masks (docs/small-bins.md).
 struct Level {
     BuildQuality quality;
     const char* name;
-    int large_split_bins, small_reclip_refs, small_leaf_refs;
+    int large_split_bins, small_reclip_refs, small_leaf_refs, small_split_bins;
 };
 
 constexpr Level kLevels[] = {
-    {BuildQuality::Low, "low", 8, 0, 8},
-    {BuildQuality::Medium, "medium", 32, int(KDRAY_RECLIP_REFS), 4},
-    {BuildQuality::High, "high", 32, int(KDRAY_RECLIP_REFS), 0},
+    {BuildQuality::Low, "low", 8, 0, 8, 0},
+    {BuildQuality::Medium, "medium", 32, int(KDRAY_RECLIP_REFS), 4, 0},
+    {BuildQuality::High, "high", 32, int(KDRAY_RECLIP_REFS), 0, 0},
 };
 
 const Level& level(BuildQuality quality) {
@@ -42,6 +44,7 @@ BuildParams with_build_quality(BuildParams params, BuildQuality quality) {
     params.large_split_bins = l.large_split_bins;
     params.small_reclip_refs = l.small_reclip_refs;
     params.small_leaf_refs = l.small_leaf_refs;
+    params.small_split_bins = l.small_split_bins;
     return params;
 }
 
@@ -49,7 +52,8 @@ std::string build_quality_of(const BuildParams& params) {
     for (const Level& l : kLevels)
         if (params.large_split_bins == l.large_split_bins &&
             params.small_reclip_refs == l.small_reclip_refs &&
-            params.small_leaf_refs == l.small_leaf_refs)
+            params.small_leaf_refs == l.small_leaf_refs &&
+            params.small_split_bins == l.small_split_bins)
             return l.name;
     return "custom";
 }

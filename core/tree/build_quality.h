@@ -20,8 +20,8 @@ const char* build_quality_name(BuildQuality quality);
 /// The level named `name`, or nothing.
 std::optional<BuildQuality> parse_build_quality(std::string_view name);
 
-/// `params` with the ladder's parameters (large_split_bins, small_reclip_refs, small_leaf_refs)
-/// set to `quality`'s.
+/// `params` with the ladder's parameters (large_split_bins, small_reclip_refs, small_leaf_refs,
+/// small_split_bins) set to `quality`'s.
 BuildParams with_build_quality(BuildParams params, BuildQuality quality);
 
 /// The level whose ladder parameters `params` has, or "custom" when a user set one of them apart

@@ -79,6 +79,11 @@ struct BuildParams {
     /// OpenCL builder: a small node of at most this many triangles is a leaf without a search;
     /// 0 searches every node (a leaf then only where no split beats C_i N).
     int small_leaf_refs = 0;
+    /// OpenCL builder: a small node not on a re-clipped table splits at the cheapest by the SAH of
+    /// this many equal bins per axis of its tight box, the large stage's rule, with no
+    /// split-candidate masks (build_small_bins.cl); 0 prices every candidate exactly over the
+    /// masks, as Zhou et al. do. At most KDRAY_SMALL_MAX_BINS.
+    int small_split_bins = 0;
     int max_depth = KDRAY_MAX_DEPTH;
     /// OpenCL builder: the small stage's shape. It changes how the tree is built, not the tree,
     /// so tree files do not record it.
@@ -91,7 +96,8 @@ struct BuildParams {
 /// is outside what the builders support: C_t finite >= 0, C_i finite > 0, empty_bonus in [0, 1),
 /// large_node_threshold in [1, KDRAY_SMALL_ROOT_MAX_REFS] (the small stage's 64-bit masks),
 /// empty_space_ratio in [0, 1], large_split_bins in [0, kMaxLargeSplitBins], small_reclip_refs
-/// in [0, KDRAY_RECLIP_REFS], small_leaf_refs in [0, KDRAY_SMALL_ROOT_MAX_REFS], max_depth in
+/// in [0, KDRAY_RECLIP_REFS], small_leaf_refs in [0, KDRAY_SMALL_ROOT_MAX_REFS],
+/// small_split_bins in [0, KDRAY_SMALL_MAX_BINS], max_depth in
 /// [0, KDRAY_MAX_DEPTH], small_stage and large_stage each one of their values. NaN fails every
 /// test. The one check of every builder, the command line and tree files read back.
 void validate_build_params(const BuildParams& params);

@@ -120,6 +120,7 @@ void write_tree_file(const std::filesystem::path& path, const KdTree& tree, cons
     w.put(std::int32_t(p.large_split_bins));
     w.put(std::int32_t(p.small_reclip_refs));
     w.put(std::int32_t(p.small_leaf_refs));
+    w.put(std::int32_t(p.small_split_bins));
     w.put(std::int32_t(p.max_depth));
     for (int a = 0; a < 3; ++a) w.put(tree.bounds.lo[a]);
     for (int a = 0; a < 3; ++a) w.put(tree.bounds.hi[a]);
@@ -169,6 +170,7 @@ TreeFile parse_tree_file(std::string_view text, const std::filesystem::path& pat
     p.large_split_bins = r.get<std::int32_t>();
     p.small_reclip_refs = r.get<std::int32_t>();
     p.small_leaf_refs = r.get<std::int32_t>();
+    p.small_split_bins = r.get<std::int32_t>();
     p.max_depth = r.get<std::int32_t>();
     for (int a = 0; a < 3; ++a) f.tree.bounds.lo[a] = r.get<float>();
     for (int a = 0; a < 3; ++a) f.tree.bounds.hi[a] = r.get<float>();

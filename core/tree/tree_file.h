@@ -14,8 +14,8 @@
 namespace kdray {
 
 /// 3: a checksum (FNV-1a of every byte before it) ends the file. 4: the small stage's re-clip and
-/// leaf sizes follow the large-node bins among the build parameters.
-inline constexpr std::uint32_t kTreeFileVersion = 4;
+/// leaf sizes follow the large-node bins among the build parameters. 5: then its bins.
+inline constexpr std::uint32_t kTreeFileVersion = 5;
 
 struct TreeFile {
     KdTree tree;

@@ -34,6 +34,7 @@
  * at the node's lo face, the hi lane at its hi face. Planar triangles below only cost the BART
  * Robots 13% of SAH (reference builder forced to that choice: 553.8 -> 623.8). */
 #include "cl/builder/kernels/build_common.cl"
+#include "cl/builder/kernels/build_small_bins.cl"
 #include "cl/builder/kernels/build_small_reclip.cl"
 #include "cl/builder/kernels/build_small_search.cl"
 /* The same stage in the paper's level-parallel shape, in this program (one compile for both). */
@@ -92,8 +93,8 @@ __kernel void kd_compute_split_masks(uint ref_begin, uint refs, __global const f
                                      __global const KdSmallRoot* small_roots,
                                      __global ulong* side_masks) {
     if (get_global_id(0) >= refs) return;
-    kd_split_masks_of(ref_begin + (uint)get_global_id(0), ref_begin, ref_box, ref_root,
-                      small_roots, side_masks);
+    kd_split_masks_of(ref_begin + (uint)get_global_id(0), ref_begin, ref_box, ref_root, small_roots,
+                      side_masks);
 }
 
 /* Work-item g: the masks of the batch's references KDRAY_MASK_GROUP g .. (of refs), four. Those
@@ -120,8 +121,8 @@ __kernel void kd_compute_split_masks_grouped(uint ref_begin, uint refs,
      * again. */
     float8 candidates[KDRAY_MASK_GROUP];
     for (uint k = 0; k < KDRAY_MASK_GROUP; ++k)
-        candidates[k] = kd_candidate_lanes(ref_box +
-                                           (size_t)(ref + min(k, together - 1u)) * KDRAY_BOX_FLOATS);
+        candidates[k] =
+            kd_candidate_lanes(ref_box + (size_t)(ref + min(k, together - 1u)) * KDRAY_BOX_FLOATS);
     float16 pos[2];
     int16 planar_above[2];
     for (uint h = 0; h < 2; ++h) {
@@ -181,8 +182,8 @@ KDRAY_INLINE void kd_drop_missed_triangles(ulong* below, ulong* above, KdBox box
     for (ulong rest = *below & *above; rest != 0; rest &= rest - 1) {
         const ulong bit = rest & (0ul - rest);
         const uint j = kd_lowest_bit(rest);
-        const KdBox ref_bounds = table ? kd_lanes_box(vload8(j, table->candidates))
-                                       : kd_load_box(ref_box, start + j);
+        const KdBox ref_bounds =
+            table ? kd_lanes_box(vload8(j, table->candidates)) : kd_load_box(ref_box, start + j);
         if (!kd_straddler_may_miss(ref_bounds, box, axis)) continue;
         /* A re-clipped node's table holds its triangles' planes: no fetch from the triangles. */
         const KdTrianglePlane plane =
@@ -194,6 +195,37 @@ KDRAY_INLINE void kd_drop_missed_triangles(ulong* below, ulong* above, KdBox box
         if (miss_above && !miss_below) *above &= ~bit;
         if (miss_below && !miss_above) *below &= ~bit;
     }
+}
+
+/* The exact split of a node (Zhou et al.'s search, build_small_search.cl): over its table when it
+ * has one, else over the small root's masks. 1 with the plane (*axis, *split) and the children's
+ * masks when a candidate costs less than the leaf's C_i N, else 0. */
+KDRAY_INLINE int kd_exact_small_split(KdBox box, ulong mask, const KdClippedTable* table,
+                                      uint start, __global const float* ref_box,
+                                      __global const ulong* root_masks, float cost_traversal,
+                                      float cost_intersection, float empty_bonus, uint* axis,
+                                      float* split, ulong* below_child, ulong* above_child) {
+    const uint best = table ? kd_best_clipped_split(box, mask, table, cost_traversal,
+                                                    cost_intersection, empty_bonus)
+                            : kd_best_small_split(box, mask, start, ref_box, root_masks,
+                                                  cost_traversal, cost_intersection, empty_bonus);
+    if (best == KDRAY_NO_CANDIDATE) return 0;
+    const uint ref = best >> KDRAY_CANDIDATE_STRIDE_SHIFT, k = best & (KDRAY_CANDIDATE_STRIDE - 1u);
+    *axis = k / 2;
+    float8 pos;
+    ulong8 below, above;
+    if (table) {
+        pos = vload8(ref, table->candidates);
+        below = convert_ulong8(vload8(0, table->masks + ref * KDRAY_MASK_WORDS_PER_REF));
+        above = convert_ulong8(vload8(1, table->masks + ref * KDRAY_MASK_WORDS_PER_REF));
+    } else {
+        __global const ulong* masks = root_masks + (size_t)(ref - start) * KDRAY_MASK_WORDS_PER_REF;
+        pos = kd_candidate_lanes(ref_box + (size_t)ref * KDRAY_BOX_FLOATS);
+        below = vload8(0, masks);
+        above = vload8(1, masks);
+    }
+    *split = kd_split_at_candidate(pos, below, above, mask, box, k, below_child, above_child);
+    return 1;
 }
 
 /* A node waiting on the subtree builder's stack: the above child of the split node `parent`. */
@@ -211,7 +243,9 @@ typedef struct KdPendingNode {
  * subtree, as the output layout wants) to the root's run of subtree_nodes (KdSmallNode records,
  * core/device/kd_build_shared.h; leaf offsets count from the subtree's first leaf reference). A
  * node becomes a leaf when no split beats C_i N, at the depth limit, when its box has no area, or
- * when it holds at most a.leaf_size triangles (the cheaper build qualities: no search at all).
+ * when it holds at most a.leaf_size triangles (the cheaper build qualities: no search at all). A
+ * node not on a re-clipped table is split by a.small_bins bins (build_small_bins.cl) when that is
+ * set; side_masks is then unused (the host makes no masks).
  *
  * The first pass gives a root of count references first_scale * (count + 1) records, from
  * first_scale * (the batch's references and roots before it) on. Outputs per root: its node and
@@ -231,6 +265,7 @@ __kernel void kd_build_small_subtrees(
     const float cost_traversal = a.cost_traversal, cost_intersection = a.cost_intersection;
     const float empty_bonus = a.empty_bonus;
     const uint reclip_refs = min(a.reclip_refs, KDRAY_RECLIP_REFS), leaf_size = a.leaf_size;
+    const uint small_bins = min(a.small_bins, KDRAY_SMALL_MAX_BINS);
     if (get_global_id(0) >= a.roots) return;
     const uint q = root_begin + (uint)get_global_id(0);
     const KdSmallRoot root = small_roots[q];
@@ -260,20 +295,31 @@ __kernel void kd_build_small_subtrees(
         deepest = max(deepest, node.depth);
         if (node.parent != KDRAY_NO_CANDIDATE && node.parent < budget)
             out[node.parent].axis_and_offset = node.parent_axis | (at << 2);
-        uint best = KDRAY_NO_CANDIDATE;
+        /* The split (axis, plane) and its children's masks, by the exact search over masks or
+         * over the node's table, or by bins (build_small_bins.cl). */
+        int split_found = 0;
+        uint axis = 0;
+        float split = 0.0f;
+        ulong children[2] = {0, 0};
+        const KdClippedTable* node_table = 0;
         const uint node_refs = popcount(node.mask);
         if (node_refs > leaf_size && node.depth < max_depth && kd_box_area(node.box) > 0.0f) {
             if (!node.on_table && node_refs <= reclip_refs)
                 node.on_table = kd_clip_node_table(node.box, &node.mask, start, ref_box, ref_tri,
                                                    triangles, &table);
-            if (node.on_table)
-                best = kd_best_clipped_split(node.box, node.mask, &table, cost_traversal,
-                                             cost_intersection, empty_bonus);
-            else
-                best = kd_best_small_split(node.box, node.mask, start, ref_box, root_masks,
-                                           cost_traversal, cost_intersection, empty_bonus);
+            if (!node.on_table && small_bins > 0) {
+                split_found = kd_binned_small_split(node.box, node.mask, start, ref_box, small_bins,
+                                                    cost_traversal, cost_intersection, empty_bonus,
+                                                    &axis, &split, &children[0], &children[1]);
+            } else {
+                split_found =
+                    kd_exact_small_split(node.box, node.mask, node.on_table ? &table : 0, start,
+                                         ref_box, root_masks, cost_traversal, cost_intersection,
+                                         empty_bonus, &axis, &split, &children[0], &children[1]);
+            }
+            if (node.on_table) node_table = &table;
         }
-        if (best == KDRAY_NO_CANDIDATE) {
+        if (!split_found) {
             /* Leaf: its triangles are the mask's, its references the next in preorder. */
             const ulong leaf_mask = node.on_table ? kd_root_mask(&table, node.mask) : node.mask;
             const uint n = popcount(leaf_mask);
@@ -284,28 +330,8 @@ __kernel void kd_build_small_subtrees(
             continue;
         }
         /* Inner node: go on with the below child, keep the above child for later. */
-        const uint ref = best >> KDRAY_CANDIDATE_STRIDE_SHIFT,
-                   k = best & (KDRAY_CANDIDATE_STRIDE - 1u), axis = k / 2;
-        float8 pos;
-        ulong8 below, above;
-        const KdClippedTable* node_table = 0;
-        if (node.on_table) {
-            pos = vload8(ref, table.candidates);
-            below = convert_ulong8(vload8(0, table.masks + ref * KDRAY_MASK_WORDS_PER_REF));
-            above = convert_ulong8(vload8(1, table.masks + ref * KDRAY_MASK_WORDS_PER_REF));
-            node_table = &table;
-        } else {
-            __global const ulong* masks =
-                root_masks + (size_t)(ref - start) * KDRAY_MASK_WORDS_PER_REF;
-            pos = kd_candidate_lanes(ref_box + (size_t)ref * KDRAY_BOX_FLOATS);
-            below = vload8(0, masks);
-            above = vload8(1, masks);
-        }
-        ulong children[2];
-        const float split = kd_split_at_candidate(pos, below, above, node.mask, node.box, k,
-                                                  &children[0], &children[1]);
-        kd_drop_missed_triangles(&children[0], &children[1], node.box, axis, split, start,
-                                 ref_box, node_table, ref_tri, triangles);
+        kd_drop_missed_triangles(&children[0], &children[1], node.box, axis, split, start, ref_box,
+                                 node_table, ref_tri, triangles);
         if (at < budget) out[at] = kd_small_inner(axis, split);
         KdPendingNode pending;
         pending.box = kd_child_box(node.box, axis, split, 1);

@@ -1,7 +1,7 @@
 /* build_small_level.cl — the small-node stage in the paper's shape (Zhou et al. 2008, §4.2): the
  * small nodes of one level at a time across the device, one work-group of KDRAY_LAUNCH_GROUP
- * work-items (most launches' group size, launch.h) per node. Work-item j prices the six candidates of the
- * node's j-th reference (the popcounts of its masks and the candidates' side masks,
+ * work-items (most launches' group size, launch.h) per node. Work-item j prices the six candidates
+ * of the node's j-th reference (the popcounts of its masks and the candidates' side masks,
  * build_small_search.cl) and the group reduces the costs in local memory to the cheapest
  * candidate, so no work-item holds a table of its own. build_small.cl's per-root kernel builds
  * each root's subtree in one work-item instead, with 4.6 KB of private tables: a CPU's shape,
@@ -26,6 +26,7 @@
  * second's for a subtree that outgrew those), so the output stage (build_output.cl) reads either
  * shape's alike. */
 #include "cl/builder/kernels/build_common.cl"
+#include "cl/builder/kernels/build_small_bins.cl"
 #include "cl/builder/kernels/build_small_reclip.cl"
 #include "cl/builder/kernels/build_small_search.cl"
 
@@ -119,21 +120,171 @@ KDRAY_INLINE ulong kd_group_root_mask(__local const KdClippedTable* t, ulong mas
     return root;
 }
 
+/* The exact split of a group's node (mask over its table when on_table, else over the small root's
+ * references from start, whose masks are root_masks): work-item lid prices the candidates of the
+ * node's lid-th reference (table entry), and the group reduces the costs in local memory to the
+ * per-root search's pick (kd_exact_small_split). 1 with the plane and the children's masks in
+ * every work-item when a candidate beats C_i N, else 0. Every work-item of the group calls it. */
+KDRAY_INLINE int kd_group_exact_split(KdBox box, ulong mask, uint on_table, uint start,
+                                      __global const float* ref_box,
+                                      __global const ulong* root_masks,
+                                      __local const KdClippedTable* table, KdSmallBatchArgs a,
+                                      uint lid, __local float* group_cost,
+                                      __local uint* group_candidate, uint* axis, float* split,
+                                      ulong* children) {
+    KdSplitSearch s;
+    kd_start_split_search(&s, box, mask, a.cost_traversal, a.cost_intersection, a.empty_bonus);
+    if ((mask >> lid) & 1ul) {
+        if (on_table)
+            kd_price_candidates(
+                &s, vload8(lid, table->candidates),
+                convert_ulong8(vload8(0, table->masks + lid * KDRAY_MASK_WORDS_PER_REF)),
+                convert_ulong8(vload8(1, table->masks + lid * KDRAY_MASK_WORDS_PER_REF)),
+                lid * KDRAY_CANDIDATE_STRIDE);
+        else
+            kd_price_candidates(
+                &s, kd_candidate_lanes(ref_box + (size_t)(start + lid) * KDRAY_BOX_FLOATS),
+                vload8(0, root_masks + (size_t)lid * KDRAY_MASK_WORDS_PER_REF),
+                vload8(1, root_masks + (size_t)lid * KDRAY_MASK_WORDS_PER_REF),
+                (start + lid) * KDRAY_CANDIDATE_STRIDE);
+    }
+    group_candidate[lid] = kd_cheapest_candidate(&s);
+    group_cost[lid] = kd_cheapest_cost(&s);
+    barrier(CLK_LOCAL_MEM_FENCE);
+    /* The least cost, then the least candidate index: the per-root search's pick. */
+    for (uint stride = KDRAY_LAUNCH_GROUP / 2; stride > 0; stride >>= 1) {
+        if (lid < stride) {
+            const float c = group_cost[lid + stride];
+            const uint k = group_candidate[lid + stride];
+            if (c < group_cost[lid] || (c == group_cost[lid] && k < group_candidate[lid])) {
+                group_cost[lid] = c;
+                group_candidate[lid] = k;
+            }
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    const uint best = group_candidate[0];
+    if (best == KDRAY_NO_CANDIDATE) return 0;
+    /* The children of the best candidate, as kd_exact_small_split makes them. */
+    const uint ref = best >> KDRAY_CANDIDATE_STRIDE_SHIFT, k = best & (KDRAY_CANDIDATE_STRIDE - 1u);
+    *axis = k / 2;
+    float8 pos;
+    ulong8 below, above;
+    if (on_table) {
+        pos = vload8(ref, table->candidates);
+        below = convert_ulong8(vload8(0, table->masks + ref * KDRAY_MASK_WORDS_PER_REF));
+        above = convert_ulong8(vload8(1, table->masks + ref * KDRAY_MASK_WORDS_PER_REF));
+    } else {
+        __global const ulong* masks = root_masks + (size_t)(ref - start) * KDRAY_MASK_WORDS_PER_REF;
+        pos = kd_candidate_lanes(ref_box + (size_t)ref * KDRAY_BOX_FLOATS);
+        below = vload8(0, masks);
+        above = vload8(1, masks);
+    }
+    *split = kd_split_at_candidate(pos, below, above, mask, box, k, &children[0], &children[1]);
+    return 1;
+}
+
+/* The binned split of a group's node (references `mask` over the small root's list from start),
+ * kd_binned_small_split's in the group's shape: work-item lid loads the node's lid-th reference,
+ * the group reduces the tight box (bounds: 6 KDRAY_LAUNCH_GROUP floats) and counts the bins
+ * (bins: KDRAY_SMALL_BIN_VALUES) in local memory, work-item 0 prices the planes, and every
+ * work-item classifies its reference against the plane. scratch[7..12] and *plane: local words
+ * for the children's masks and the pick. 1 with the plane and the children's masks in every
+ * work-item when a plane beats C_i N, else 0. Every work-item of the group calls it. */
+KDRAY_INLINE int kd_group_binned_split(KdBox box, ulong mask, uint start,
+                                       __global const float* ref_box, uint small_bins,
+                                       KdSmallBatchArgs a, uint lid, __local float* bounds,
+                                       __local uint* bins, __local float* plane,
+                                       __local uint* scratch, uint* axis, float* split,
+                                       ulong* children) {
+    const int mine = (mask >> lid) & 1ul;
+    KdBox b;
+    b.lo = (float3)(INFINITY);
+    b.hi = (float3)(-INFINITY);
+    if (mine) b = kd_load_box(ref_box, start + lid);
+    for (uint i = 0; i < 3; ++i) {
+        bounds[i * KDRAY_LAUNCH_GROUP + lid] = kd_axis_of(b.lo, i);
+        bounds[(3 + i) * KDRAY_LAUNCH_GROUP + lid] = kd_axis_of(b.hi, i);
+    }
+    for (uint k = lid; k < KDRAY_BIN_COUNTS * small_bins; k += KDRAY_LAUNCH_GROUP) bins[k] = 0;
+    if (lid < 4) scratch[7 + lid] = 0;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (uint stride = KDRAY_LAUNCH_GROUP / 2; stride > 0; stride >>= 1) {
+        if (lid < stride)
+            for (uint i = 0; i < 3; ++i) {
+                __local float* lo = bounds + i * KDRAY_LAUNCH_GROUP;
+                __local float* hi = bounds + (3 + i) * KDRAY_LAUNCH_GROUP;
+                lo[lid] = fmin(lo[lid], lo[lid + stride]);
+                hi[lid] = fmax(hi[lid], hi[lid + stride]);
+            }
+        barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    KdBox tight;
+    tight.lo = fmax((float3)(bounds[0], bounds[KDRAY_LAUNCH_GROUP], bounds[2 * KDRAY_LAUNCH_GROUP]),
+                    box.lo);
+    tight.hi = fmin((float3)(bounds[3 * KDRAY_LAUNCH_GROUP], bounds[4 * KDRAY_LAUNCH_GROUP],
+                             bounds[5 * KDRAY_LAUNCH_GROUP]),
+                    box.hi);
+    if (mine) {
+        uint4 lo_bin, hi_bin;
+        kd_bins_of(b, (float4)(tight.lo, 0.0f), kd_bin_scale(tight, small_bins), small_bins,
+                   &lo_bin, &hi_bin);
+        atomic_inc(&bins[lo_bin.x]);
+        atomic_inc(&bins[small_bins + hi_bin.x]);
+        atomic_inc(&bins[2 * small_bins + lo_bin.y]);
+        atomic_inc(&bins[3 * small_bins + hi_bin.y]);
+        atomic_inc(&bins[4 * small_bins + lo_bin.z]);
+        atomic_inc(&bins[5 * small_bins + hi_bin.z]);
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (lid == 0) {
+        uint counts[KDRAY_SMALL_BIN_VALUES];
+        for (uint k = 0; k < KDRAY_BIN_COUNTS * small_bins; ++k) counts[k] = bins[k];
+        const uint n = popcount(mask);
+        uint best_axis = 0;
+        float best_pos = 0.0f;
+        const float cost =
+            kd_cheapest_binned_plane(box, tight, counts, small_bins, n, a.cost_traversal,
+                                     a.cost_intersection, a.empty_bonus, &best_axis, &best_pos);
+        scratch[11] = cost < a.cost_intersection * (float)n;
+        scratch[12] = best_axis;
+        *plane = best_pos;
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (!scratch[11]) return 0;
+    *axis = scratch[12];
+    *split = *plane;
+    if (mine) {
+        const uint sides = kd_small_bin_sides(b, *axis, *split);
+        const uint word = lid >> 5, bit = 1u << (lid & 31u);
+        if (sides & KDRAY_BELOW) atomic_or(&scratch[7 + word], bit);
+        if (sides & KDRAY_ABOVE) atomic_or(&scratch[9 + word], bit);
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    children[0] = kd_join_mask(scratch[7], scratch[8]);
+    children[1] = kd_join_mask(scratch[9], scratch[10]);
+    return 1;
+}
+
 /* One level of the small stage (§4.2), one work-group per node (nodes level_begin.., level_nodes
  * of them): the node becomes a leaf or splits at its cheapest candidate, by the rules of
  * kd_build_small_subtrees. A split node's two children are appended to the next level at
  * *next_free (the host made room for two per node). The group's work-items share the node's
  * table when it re-clips and reduce the candidates' costs in local memory. */
-__kernel __attribute__((reqd_work_group_size(KDRAY_LAUNCH_GROUP, 1, 1))) void
-kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
-                     __global const KdSmallRoot* small_roots, __global const float* ref_box,
-                     __global const ulong* side_masks, __global const uint* ref_tri,
-                     __global const float* triangles, __global KdSmallLevelNode* nodes,
-                     __global uint* next_free) {
+__kernel __attribute__((reqd_work_group_size(KDRAY_LAUNCH_GROUP, 1, 1))) void kd_split_small_level(
+    KdSmallBatchArgs a, uint level_begin, uint level_nodes, __global const KdSmallRoot* small_roots,
+    __global const float* ref_box, __global const ulong* side_masks, __global const uint* ref_tri,
+    __global const float* triangles, __global KdSmallLevelNode* nodes, __global uint* next_free) {
     __local KdClippedTable table;
     __local float group_cost[KDRAY_LAUNCH_GROUP];
     __local uint group_candidate[KDRAY_LAUNCH_GROUP];
-    __local uint scratch[7]; /* [0] a reference reaches past the box; [1, 2] kept; [3, 6] dropped */
+    /* [0] a reference reaches past the box; [1, 2] kept; [3, 6] dropped; [7, 10] a binned
+     * split's children; [11] a binned plane found, [12] its axis */
+    __local uint scratch[13];
+    __local float group_bounds[6 * KDRAY_LAUNCH_GROUP]; /* a binned node's tight box, reduced */
+    __local uint group_bins[KDRAY_SMALL_BIN_VALUES];
+    __local float group_plane;
+    const uint small_bins = min(a.small_bins, KDRAY_SMALL_MAX_BINS);
     const uint g = get_group_id(0), lid = get_local_id(0);
     /* Every work-item of a group takes the same branches up to the end: the barriers need it. */
     if (g >= level_nodes) return;
@@ -153,7 +304,10 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
     KdBox table_box = kd_level_box(n.table_box);
     ulong table_mask = kd_join_mask(n.table_mask_lo, n.table_mask_hi);
     int have_table = 0; /* the table is in local memory */
-    uint best = KDRAY_NO_CANDIDATE;
+    int split_found = 0;
+    uint axis = 0;
+    float split = 0.0f;
+    ulong children[2] = {0, 0};
 
     /* Search when the node is no leaf by size, depth or a box without area. */
     if (popcount(mask) > a.leaf_size && n.depth < a.max_depth && kd_box_area(box) > 0.0f) {
@@ -185,42 +339,17 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
             have_table = 1;
         }
 
-        /* Work-item lid prices the candidates of the node's lid-th reference (table entry). */
-        KdSplitSearch s;
-        kd_start_split_search(&s, box, mask, a.cost_traversal, a.cost_intersection, a.empty_bonus);
-        if ((mask >> lid) & 1ul) {
-            if (on_table)
-                kd_price_candidates(
-                    &s, vload8(lid, table.candidates),
-                    convert_ulong8(vload8(0, table.masks + lid * KDRAY_MASK_WORDS_PER_REF)),
-                    convert_ulong8(vload8(1, table.masks + lid * KDRAY_MASK_WORDS_PER_REF)),
-                    lid * KDRAY_CANDIDATE_STRIDE);
-            else
-                kd_price_candidates(
-                    &s, kd_candidate_lanes(ref_box + (size_t)(start + lid) * KDRAY_BOX_FLOATS),
-                    vload8(0, root_masks + (size_t)lid * KDRAY_MASK_WORDS_PER_REF),
-                    vload8(1, root_masks + (size_t)lid * KDRAY_MASK_WORDS_PER_REF),
-                    (start + lid) * KDRAY_CANDIDATE_STRIDE);
-        }
-        group_candidate[lid] = kd_cheapest_candidate(&s);
-        group_cost[lid] = kd_cheapest_cost(&s);
-        barrier(CLK_LOCAL_MEM_FENCE);
-        /* The least cost, then the least candidate index: the per-root search's pick. */
-        for (uint stride = KDRAY_LAUNCH_GROUP / 2; stride > 0; stride >>= 1) {
-            if (lid < stride) {
-                const float c = group_cost[lid + stride];
-                const uint k = group_candidate[lid + stride];
-                if (c < group_cost[lid] || (c == group_cost[lid] && k < group_candidate[lid])) {
-                    group_cost[lid] = c;
-                    group_candidate[lid] = k;
-                }
-            }
-            barrier(CLK_LOCAL_MEM_FENCE);
-        }
-        best = group_candidate[0];
+        if (!on_table && small_bins > 0)
+            split_found =
+                kd_group_binned_split(box, mask, start, ref_box, small_bins, a, lid, group_bounds,
+                                      group_bins, &group_plane, scratch, &axis, &split, children);
+        else
+            split_found =
+                kd_group_exact_split(box, mask, on_table, start, ref_box, root_masks, &table, a,
+                                     lid, group_cost, group_candidate, &axis, &split, children);
     }
 
-    if (best == KDRAY_NO_CANDIDATE) {
+    if (!split_found) {
         /* Leaf: its triangles over the root's references. */
         if (lid == 0) {
             const ulong leaf_mask = have_table ? kd_group_root_mask(&table, mask)
@@ -234,24 +363,6 @@ kd_split_small_level(KdSmallBatchArgs a, uint level_begin, uint level_nodes,
         return;
     }
 
-    /* Inner node: the children of the best candidate, as kd_build_small_subtrees makes them. */
-    const uint ref = best >> KDRAY_CANDIDATE_STRIDE_SHIFT, k = best & (KDRAY_CANDIDATE_STRIDE - 1u),
-               axis = k / 2;
-    float8 pos;
-    ulong8 below, above;
-    if (on_table) {
-        pos = vload8(ref, table.candidates);
-        below = convert_ulong8(vload8(0, table.masks + ref * KDRAY_MASK_WORDS_PER_REF));
-        above = convert_ulong8(vload8(1, table.masks + ref * KDRAY_MASK_WORDS_PER_REF));
-    } else {
-        __global const ulong* masks = root_masks + (size_t)(ref - start) * KDRAY_MASK_WORDS_PER_REF;
-        pos = kd_candidate_lanes(ref_box + (size_t)ref * KDRAY_BOX_FLOATS);
-        below = vload8(0, masks);
-        above = vload8(1, masks);
-    }
-    ulong children[2];
-    const float split =
-        kd_split_at_candidate(pos, below, above, mask, box, k, &children[0], &children[1]);
     /* kd_drop_missed_triangles, a straddling triangle per work-item (those kd_straddler_may_miss
      * picks): one whose plane misses a child's box leaves that child. */
     if (lid < 4) scratch[3 + lid] = 0;
