@@ -7,8 +7,10 @@ namespace {
 /// builder at its best: exact SAH over every candidate, re-clipped small nodes. medium is high
 /// that stops searching nodes of 4 triangles or fewer (the deep levels hold most of the small
 /// stage's nodes); low stops at 8, never re-clips, and bins large nodes in 8 bins. No level bins
-/// small nodes (small_split_bins): on Kitchen and the bunny the binned search made 23-90% more
-/// nodes and a slower build than the exact one over masks (docs/small-bins.md).
+/// small nodes (small_split_bins): at 8 bins the binned search made 24-88% more nodes, a higher
+/// SAH and a slower build than the exact one over masks on Kitchen, the bunny and the dragon
+/// (docs/small-bins.md), its planes cutting the triangles that a candidate at their bounds
+/// would have left whole.
 struct Level {
     BuildQuality quality;
     const char* name;
