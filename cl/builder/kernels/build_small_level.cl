@@ -184,85 +184,121 @@ KDRAY_INLINE int kd_group_exact_split(KdBox box, ulong mask, uint on_table, uint
     return 1;
 }
 
+/* A work-item per binned plane; the binned search's local words inside the re-clip table's. */
+#if 3 * (KDRAY_SMALL_MAX_BINS + 1) > KDRAY_LAUNCH_GROUP || \
+    KDRAY_RECLIP_REFS * 8 < 2 * KDRAY_LAUNCH_GROUP ||      \
+    KDRAY_RECLIP_REFS * KDRAY_MASK_WORDS_PER_REF < KDRAY_SMALL_BIN_VALUES + 4
+#error "kd_group_binned_split: too many bins for a group, or its words exceed the table's"
+#endif
+
 /* The binned split of a group's node (references `mask` over the small root's list from start),
  * kd_binned_small_split's in the group's shape: work-item lid loads the node's lid-th reference,
- * the group reduces the tight box (bounds: 6 KDRAY_LAUNCH_GROUP floats) and counts the bins
- * (bins: KDRAY_SMALL_BIN_VALUES) in local memory, work-item 0 prices the planes, and every
- * work-item classifies its reference against the plane. scratch[7..12] and *plane: local words
- * for the children's masks and the pick. 1 with the plane and the children's masks in every
- * work-item when a plane beats C_i N, else 0. Every work-item of the group calls it. */
+ * the group reduces the tight box and counts the bins in local memory, work-item k < 3
+ * (bins + 1) prices plane k (axis k / (bins + 1)) by kd_binned_plane_cost, the group reduces the
+ * costs (group_cost, group_candidate) to the least, then the least index: the first cheapest in
+ * (axis, plane) order, as the per-root stage's loop picks. Every work-item then classifies its
+ * reference. 1 with the plane and the children's masks in every work-item when a plane beats
+ * C_i N, else 0. Every work-item of the group calls it. */
 KDRAY_INLINE int kd_group_binned_split(KdBox box, ulong mask, uint start,
                                        __global const float* ref_box, uint small_bins,
-                                       KdSmallBatchArgs a, uint lid, __local float* bounds,
-                                       __local uint* bins, __local float* plane,
-                                       __local uint* scratch, uint* axis, float* split,
-                                       ulong* children) {
+                                       KdSmallBatchArgs a, uint lid, __local KdClippedTable* table,
+                                       __local float* group_cost, __local uint* group_candidate,
+                                       uint* axis, float* split, ulong* children) {
+    /* A binned node has no table: the tight box's reduction (a bound per work-item, an axis at a
+     * time) takes the table's candidate words, the bin counts and the children's masks its mask
+     * words, so the binned search adds nothing to the kernel's local memory. */
+    __local float* lo = table->candidates;
+    __local float* hi = table->candidates + KDRAY_LAUNCH_GROUP;
+    __local uint* counts = table->masks;
+    __local uint* child_words = table->masks + KDRAY_SMALL_BIN_VALUES;
     const int mine = (mask >> lid) & 1ul;
     KdBox b;
     b.lo = (float3)(INFINITY);
     b.hi = (float3)(-INFINITY);
     if (mine) b = kd_load_box(ref_box, start + lid);
+    for (uint k = lid; k < KDRAY_BIN_COUNTS * small_bins; k += KDRAY_LAUNCH_GROUP) counts[k] = 0;
+    if (lid < 4) child_words[lid] = 0;
+    float3 reduced_lo, reduced_hi;
     for (uint i = 0; i < 3; ++i) {
-        bounds[i * KDRAY_LAUNCH_GROUP + lid] = kd_axis_of(b.lo, i);
-        bounds[(3 + i) * KDRAY_LAUNCH_GROUP + lid] = kd_axis_of(b.hi, i);
-    }
-    for (uint k = lid; k < KDRAY_BIN_COUNTS * small_bins; k += KDRAY_LAUNCH_GROUP) bins[k] = 0;
-    if (lid < 4) scratch[7 + lid] = 0;
-    barrier(CLK_LOCAL_MEM_FENCE);
-    for (uint stride = KDRAY_LAUNCH_GROUP / 2; stride > 0; stride >>= 1) {
-        if (lid < stride)
-            for (uint i = 0; i < 3; ++i) {
-                __local float* lo = bounds + i * KDRAY_LAUNCH_GROUP;
-                __local float* hi = bounds + (3 + i) * KDRAY_LAUNCH_GROUP;
+        lo[lid] = kd_axis_of(b.lo, i);
+        hi[lid] = kd_axis_of(b.hi, i);
+        barrier(CLK_LOCAL_MEM_FENCE);
+        for (uint stride = KDRAY_LAUNCH_GROUP / 2; stride > 0; stride >>= 1) {
+            if (lid < stride) {
                 lo[lid] = fmin(lo[lid], lo[lid + stride]);
                 hi[lid] = fmax(hi[lid], hi[lid + stride]);
             }
+            barrier(CLK_LOCAL_MEM_FENCE);
+        }
+        if (i == 0) reduced_lo.x = lo[0], reduced_hi.x = hi[0];
+        if (i == 1) reduced_lo.y = lo[0], reduced_hi.y = hi[0];
+        if (i == 2) reduced_lo.z = lo[0], reduced_hi.z = hi[0];
+        /* Every work-item has read the bounds before the next axis overwrites them. */
         barrier(CLK_LOCAL_MEM_FENCE);
     }
     KdBox tight;
-    tight.lo = fmax((float3)(bounds[0], bounds[KDRAY_LAUNCH_GROUP], bounds[2 * KDRAY_LAUNCH_GROUP]),
-                    box.lo);
-    tight.hi = fmin((float3)(bounds[3 * KDRAY_LAUNCH_GROUP], bounds[4 * KDRAY_LAUNCH_GROUP],
-                             bounds[5 * KDRAY_LAUNCH_GROUP]),
-                    box.hi);
+    tight.lo = fmax(reduced_lo, box.lo);
+    tight.hi = fmin(reduced_hi, box.hi);
     if (mine) {
         uint4 lo_bin, hi_bin;
         kd_bins_of(b, (float4)(tight.lo, 0.0f), kd_bin_scale(tight, small_bins), small_bins,
                    &lo_bin, &hi_bin);
-        atomic_inc(&bins[lo_bin.x]);
-        atomic_inc(&bins[small_bins + hi_bin.x]);
-        atomic_inc(&bins[2 * small_bins + lo_bin.y]);
-        atomic_inc(&bins[3 * small_bins + hi_bin.y]);
-        atomic_inc(&bins[4 * small_bins + lo_bin.z]);
-        atomic_inc(&bins[5 * small_bins + hi_bin.z]);
+        atomic_inc(&counts[lo_bin.x]);
+        atomic_inc(&counts[small_bins + hi_bin.x]);
+        atomic_inc(&counts[2 * small_bins + lo_bin.y]);
+        atomic_inc(&counts[3 * small_bins + hi_bin.y]);
+        atomic_inc(&counts[4 * small_bins + lo_bin.z]);
+        atomic_inc(&counts[5 * small_bins + hi_bin.z]);
     }
     barrier(CLK_LOCAL_MEM_FENCE);
-    if (lid == 0) {
-        uint counts[KDRAY_SMALL_BIN_VALUES];
-        for (uint k = 0; k < KDRAY_BIN_COUNTS * small_bins; ++k) counts[k] = bins[k];
-        const uint n = popcount(mask);
-        uint best_axis = 0;
-        float best_pos = 0.0f;
-        const float cost =
-            kd_cheapest_binned_plane(box, tight, counts, small_bins, n, a.cost_traversal,
-                                     a.cost_intersection, a.empty_bonus, &best_axis, &best_pos);
-        scratch[11] = cost < a.cost_intersection * (float)n;
-        scratch[12] = best_axis;
-        *plane = best_pos;
+    /* Plane lid, against the leaf: a plane must cost less than C_i N, and NO_CANDIDATE (the
+     * largest index) keeps the leaf's cost. */
+    const uint n = popcount(mask), planes = small_bins + 1;
+    const float leaf_cost = a.cost_intersection * (float)n;
+    float cost = leaf_cost;
+    uint candidate = KDRAY_NO_CANDIDATE;
+    if (lid < 3 * planes) {
+        const uint plane_axis = lid / planes, plane = lid % planes;
+        uint below = 0, above = n;
+        for (uint k = 0; k < plane; ++k) {
+            below += counts[(2 * plane_axis) * small_bins + k];
+            above -= counts[(2 * plane_axis + 1) * small_bins + k];
+        }
+        const KdPlaneFrame f = kd_plane_frame(box, plane_axis, a.cost_intersection);
+        const float p = kd_binned_plane_pos(tight, plane_axis, plane, small_bins);
+        if (kd_plane_inside(f, p)) {
+            const float c =
+                kd_binned_plane_cost(f, p, below, above, a.cost_traversal, a.empty_bonus);
+            if (c < leaf_cost) cost = c, candidate = lid;
+        }
     }
+    group_cost[lid] = cost;
+    group_candidate[lid] = candidate;
     barrier(CLK_LOCAL_MEM_FENCE);
-    if (!scratch[11]) return 0;
-    *axis = scratch[12];
-    *split = *plane;
+    for (uint stride = KDRAY_LAUNCH_GROUP / 2; stride > 0; stride >>= 1) {
+        if (lid < stride) {
+            const float c = group_cost[lid + stride];
+            const uint k = group_candidate[lid + stride];
+            if (c < group_cost[lid] || (c == group_cost[lid] && k < group_candidate[lid])) {
+                group_cost[lid] = c;
+                group_candidate[lid] = k;
+            }
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    const uint best = group_candidate[0];
+    if (best == KDRAY_NO_CANDIDATE) return 0;
+    *axis = best / planes;
+    *split = kd_binned_plane_pos(tight, *axis, best % planes, small_bins);
     if (mine) {
         const uint sides = kd_small_bin_sides(b, *axis, *split);
         const uint word = lid >> 5, bit = 1u << (lid & 31u);
-        if (sides & KDRAY_BELOW) atomic_or(&scratch[7 + word], bit);
-        if (sides & KDRAY_ABOVE) atomic_or(&scratch[9 + word], bit);
+        if (sides & KDRAY_BELOW) atomic_or(&child_words[word], bit);
+        if (sides & KDRAY_ABOVE) atomic_or(&child_words[2 + word], bit);
     }
     barrier(CLK_LOCAL_MEM_FENCE);
-    children[0] = kd_join_mask(scratch[7], scratch[8]);
-    children[1] = kd_join_mask(scratch[9], scratch[10]);
+    children[0] = kd_join_mask(child_words[0], child_words[1]);
+    children[1] = kd_join_mask(child_words[2], child_words[3]);
     return 1;
 }
 
@@ -275,15 +311,11 @@ __kernel __attribute__((reqd_work_group_size(KDRAY_LAUNCH_GROUP, 1, 1))) void kd
     KdSmallBatchArgs a, uint level_begin, uint level_nodes, __global const KdSmallRoot* small_roots,
     __global const float* ref_box, __global const ulong* side_masks, __global const uint* ref_tri,
     __global const float* triangles, __global KdSmallLevelNode* nodes, __global uint* next_free) {
-    __local KdClippedTable table;
+    __local KdClippedTable table_in_group;
+    __local KdClippedTable* const table = &table_in_group;
     __local float group_cost[KDRAY_LAUNCH_GROUP];
     __local uint group_candidate[KDRAY_LAUNCH_GROUP];
-    /* [0] a reference reaches past the box; [1, 2] kept; [3, 6] dropped; [7, 10] a binned
-     * split's children; [11] a binned plane found, [12] its axis */
-    __local uint scratch[13];
-    __local float group_bounds[6 * KDRAY_LAUNCH_GROUP]; /* a binned node's tight box, reduced */
-    __local uint group_bins[KDRAY_SMALL_BIN_VALUES];
-    __local float group_plane;
+    __local uint scratch[7]; /* [0] a reference reaches past the box; [1, 2] kept; [3, 6] dropped */
     const uint small_bins = min(a.small_bins, KDRAY_SMALL_MAX_BINS);
     const uint g = get_group_id(0), lid = get_local_id(0);
     /* Every work-item of a group takes the same branches up to the end: the barriers need it. */
@@ -334,25 +366,25 @@ __kernel __attribute__((reqd_work_group_size(KDRAY_LAUNCH_GROUP, 1, 1))) void kd
          * segfaulted every per-level build). */
         if (on_table) {
             const uint size = kd_group_clip_table(table_box, table_mask, start, ref_box, ref_tri,
-                                                  triangles, &table, scratch + 1, lid);
+                                                  triangles, table, scratch + 1, lid);
             if (fresh_table) mask = size >= 64 ? ~0ul : (1ul << size) - 1ul;
             have_table = 1;
         }
 
         if (!on_table && small_bins > 0)
             split_found =
-                kd_group_binned_split(box, mask, start, ref_box, small_bins, a, lid, group_bounds,
-                                      group_bins, &group_plane, scratch, &axis, &split, children);
+                kd_group_binned_split(box, mask, start, ref_box, small_bins, a, lid, table,
+                                      group_cost, group_candidate, &axis, &split, children);
         else
             split_found =
-                kd_group_exact_split(box, mask, on_table, start, ref_box, root_masks, &table, a,
-                                     lid, group_cost, group_candidate, &axis, &split, children);
+                kd_group_exact_split(box, mask, on_table, start, ref_box, root_masks, table, a, lid,
+                                     group_cost, group_candidate, &axis, &split, children);
     }
 
     if (!split_found) {
         /* Leaf: its triangles over the root's references. */
         if (lid == 0) {
-            const ulong leaf_mask = have_table ? kd_group_root_mask(&table, mask)
+            const ulong leaf_mask = have_table ? kd_group_root_mask(table, mask)
                                                : kd_join_mask(n.root_mask_lo, n.root_mask_hi);
             nodes[id].axis = KDRAY_LEAF_AXIS;
             nodes[id].split = 0.0f;
@@ -369,11 +401,11 @@ __kernel __attribute__((reqd_work_group_size(KDRAY_LAUNCH_GROUP, 1, 1))) void kd
     barrier(CLK_LOCAL_MEM_FENCE);
     const ulong straddle = children[0] & children[1];
     if (((straddle >> lid) & 1ul) &&
-        kd_straddler_may_miss(on_table ? kd_lanes_box(vload8(lid, table.candidates))
+        kd_straddler_may_miss(on_table ? kd_lanes_box(vload8(lid, table->candidates))
                                        : kd_load_box(ref_box, start + lid),
                               box, axis)) {
         const KdTrianglePlane plane =
-            on_table ? table.planes[lid]
+            on_table ? table->planes[lid]
                      : kd_triangle_plane(triangles +
                                          (size_t)ref_tri[start + lid] * KDRAY_FLOATS_PER_TRIANGLE);
         const int miss_below = kd_plane_misses_box(&plane, kd_child_box(box, axis, split, 0));
@@ -394,7 +426,7 @@ __kernel __attribute__((reqd_work_group_size(KDRAY_LAUNCH_GROUP, 1, 1))) void kd
         KdSmallLevelNode c;
         kd_store_level_box(kd_child_box(box, axis, split, side), c.box);
         const ulong root_mask =
-            on_table ? kd_group_root_mask(&table, child_mask[side]) : child_mask[side];
+            on_table ? kd_group_root_mask(table, child_mask[side]) : child_mask[side];
         c.mask_lo = (uint)child_mask[side];
         c.mask_hi = (uint)(child_mask[side] >> 32);
         c.root_mask_lo = (uint)root_mask;
