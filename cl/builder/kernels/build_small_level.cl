@@ -120,6 +120,25 @@ KDRAY_INLINE ulong kd_group_root_mask(__local const KdClippedTable* t, ulong mas
     return root;
 }
 
+/* The group's candidate of least cost (each work-item's in group_cost / group_candidate), the
+ * least index among equal costs: the per-root search's pick. Every work-item calls it after a
+ * barrier and gets the same index. */
+KDRAY_INLINE uint kd_group_least_candidate(__local float* group_cost, __local uint* group_candidate,
+                                           uint lid) {
+    for (uint stride = KDRAY_LAUNCH_GROUP / 2; stride > 0; stride >>= 1) {
+        if (lid < stride) {
+            const float c = group_cost[lid + stride];
+            const uint k = group_candidate[lid + stride];
+            if (c < group_cost[lid] || (c == group_cost[lid] && k < group_candidate[lid])) {
+                group_cost[lid] = c;
+                group_candidate[lid] = k;
+            }
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    return group_candidate[0];
+}
+
 /* The exact split of a group's node (mask over its table when on_table, else over the small root's
  * references from start, whose masks are root_masks): work-item lid prices the candidates of the
  * node's lid-th reference (table entry), and the group reduces the costs in local memory to the
@@ -151,19 +170,7 @@ KDRAY_INLINE int kd_group_exact_split(KdBox box, ulong mask, uint on_table, uint
     group_candidate[lid] = kd_cheapest_candidate(&s);
     group_cost[lid] = kd_cheapest_cost(&s);
     barrier(CLK_LOCAL_MEM_FENCE);
-    /* The least cost, then the least candidate index: the per-root search's pick. */
-    for (uint stride = KDRAY_LAUNCH_GROUP / 2; stride > 0; stride >>= 1) {
-        if (lid < stride) {
-            const float c = group_cost[lid + stride];
-            const uint k = group_candidate[lid + stride];
-            if (c < group_cost[lid] || (c == group_cost[lid] && k < group_candidate[lid])) {
-                group_cost[lid] = c;
-                group_candidate[lid] = k;
-            }
-        }
-        barrier(CLK_LOCAL_MEM_FENCE);
-    }
-    const uint best = group_candidate[0];
+    const uint best = kd_group_least_candidate(group_cost, group_candidate, lid);
     if (best == KDRAY_NO_CANDIDATE) return 0;
     /* The children of the best candidate, as kd_exact_small_split makes them. */
     const uint ref = best >> KDRAY_CANDIDATE_STRIDE_SHIFT, k = best & (KDRAY_CANDIDATE_STRIDE - 1u);
@@ -275,18 +282,7 @@ KDRAY_INLINE int kd_group_binned_split(KdBox box, ulong mask, uint start,
     group_cost[lid] = cost;
     group_candidate[lid] = candidate;
     barrier(CLK_LOCAL_MEM_FENCE);
-    for (uint stride = KDRAY_LAUNCH_GROUP / 2; stride > 0; stride >>= 1) {
-        if (lid < stride) {
-            const float c = group_cost[lid + stride];
-            const uint k = group_candidate[lid + stride];
-            if (c < group_cost[lid] || (c == group_cost[lid] && k < group_candidate[lid])) {
-                group_cost[lid] = c;
-                group_candidate[lid] = k;
-            }
-        }
-        barrier(CLK_LOCAL_MEM_FENCE);
-    }
-    const uint best = group_candidate[0];
+    const uint best = kd_group_least_candidate(group_cost, group_candidate, lid);
     if (best == KDRAY_NO_CANDIDATE) return 0;
     *axis = best / planes;
     *split = kd_binned_plane_pos(tight, *axis, best % planes, small_bins);
@@ -311,8 +307,7 @@ __kernel __attribute__((reqd_work_group_size(KDRAY_LAUNCH_GROUP, 1, 1))) void kd
     KdSmallBatchArgs a, uint level_begin, uint level_nodes, __global const KdSmallRoot* small_roots,
     __global const float* ref_box, __global const ulong* side_masks, __global const uint* ref_tri,
     __global const float* triangles, __global KdSmallLevelNode* nodes, __global uint* next_free) {
-    __local KdClippedTable table_in_group;
-    __local KdClippedTable* const table = &table_in_group;
+    __local KdClippedTable table;
     __local float group_cost[KDRAY_LAUNCH_GROUP];
     __local uint group_candidate[KDRAY_LAUNCH_GROUP];
     __local uint scratch[7]; /* [0] a reference reaches past the box; [1, 2] kept; [3, 6] dropped */
@@ -366,25 +361,25 @@ __kernel __attribute__((reqd_work_group_size(KDRAY_LAUNCH_GROUP, 1, 1))) void kd
          * segfaulted every per-level build). */
         if (on_table) {
             const uint size = kd_group_clip_table(table_box, table_mask, start, ref_box, ref_tri,
-                                                  triangles, table, scratch + 1, lid);
+                                                  triangles, &table, scratch + 1, lid);
             if (fresh_table) mask = size >= 64 ? ~0ul : (1ul << size) - 1ul;
             have_table = 1;
         }
 
         if (!on_table && small_bins > 0)
             split_found =
-                kd_group_binned_split(box, mask, start, ref_box, small_bins, a, lid, table,
+                kd_group_binned_split(box, mask, start, ref_box, small_bins, a, lid, &table,
                                       group_cost, group_candidate, &axis, &split, children);
         else
             split_found =
-                kd_group_exact_split(box, mask, on_table, start, ref_box, root_masks, table, a, lid,
-                                     group_cost, group_candidate, &axis, &split, children);
+                kd_group_exact_split(box, mask, on_table, start, ref_box, root_masks, &table, a,
+                                     lid, group_cost, group_candidate, &axis, &split, children);
     }
 
     if (!split_found) {
         /* Leaf: its triangles over the root's references. */
         if (lid == 0) {
-            const ulong leaf_mask = have_table ? kd_group_root_mask(table, mask)
+            const ulong leaf_mask = have_table ? kd_group_root_mask(&table, mask)
                                                : kd_join_mask(n.root_mask_lo, n.root_mask_hi);
             nodes[id].axis = KDRAY_LEAF_AXIS;
             nodes[id].split = 0.0f;
@@ -401,11 +396,11 @@ __kernel __attribute__((reqd_work_group_size(KDRAY_LAUNCH_GROUP, 1, 1))) void kd
     barrier(CLK_LOCAL_MEM_FENCE);
     const ulong straddle = children[0] & children[1];
     if (((straddle >> lid) & 1ul) &&
-        kd_straddler_may_miss(on_table ? kd_lanes_box(vload8(lid, table->candidates))
+        kd_straddler_may_miss(on_table ? kd_lanes_box(vload8(lid, table.candidates))
                                        : kd_load_box(ref_box, start + lid),
                               box, axis)) {
         const KdTrianglePlane plane =
-            on_table ? table->planes[lid]
+            on_table ? table.planes[lid]
                      : kd_triangle_plane(triangles +
                                          (size_t)ref_tri[start + lid] * KDRAY_FLOATS_PER_TRIANGLE);
         const int miss_below = kd_plane_misses_box(&plane, kd_child_box(box, axis, split, 0));
@@ -426,7 +421,7 @@ __kernel __attribute__((reqd_work_group_size(KDRAY_LAUNCH_GROUP, 1, 1))) void kd
         KdSmallLevelNode c;
         kd_store_level_box(kd_child_box(box, axis, split, side), c.box);
         const ulong root_mask =
-            on_table ? kd_group_root_mask(table, child_mask[side]) : child_mask[side];
+            on_table ? kd_group_root_mask(&table, child_mask[side]) : child_mask[side];
         c.mask_lo = (uint)child_mask[side];
         c.mask_hi = (uint)(child_mask[side] >> 32);
         c.root_mask_lo = (uint)root_mask;
