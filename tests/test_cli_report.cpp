@@ -89,7 +89,7 @@ TEST_CASE(
         args.push_back(
             (source_dir() / "testdata" / "anim" / ("frame_00" + std::to_string(i) + ".obj"))
                 .string());
-    for (const std::string a :
+    for (const std::string& a :
          {std::string("-o"), (dir / "three").string(), std::string("--size"), std::string("16x12"),
           std::string("--builder"), std::string("reference"), std::string("--tracer"),
           std::string("reference"), std::string("-q")})

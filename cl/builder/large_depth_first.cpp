@@ -79,9 +79,17 @@ std::vector<cl_uint> arena_starts(const std::vector<cl_uint>& refs, std::uint64_
 /// The arenas of one run of the depth-first kernel, kept until its subtrees are committed.
 struct Arenas {
     DeviceArray start, work_tri, work_box, records, roots, small_tri, small_box, leaf_refs, stacks,
-        counts;
+        counts, next_item;
     cl_uint item_count = 0;  // deep roots the run built
 };
+
+/* Work-items for a run of `items` subtrees: on a CPU one per compute unit, each taking subtree
+ * after subtree off the kernel's counter; on a GPU one per subtree, since it runs them all at
+ * once and a few looping work-items would leave it idle. */
+std::size_t depth_first_workers(const BuildContext& ctx, std::size_t items) {
+    if (!ctx.device.is_cpu()) return items;
+    return std::min<std::size_t>(items, std::max(1u, ctx.device.info().compute_units));
+}
 
 cl_uint arena_total(const std::vector<cl_uint>& start, unsigned kind, std::size_t nodes) {
     // At least one entry: OpenCL has no empty buffers.
@@ -127,6 +135,10 @@ DepthFirstResult build_depth_first(BuildContext& ctx, const TriangleBounds& tria
     std::vector<cl_uint> counts(nodes * KDRAY_DF_COUNTS);  // of every subtree, from its last run
     std::vector<cl_uint> items(nodes);
     for (std::size_t w = 0; w < nodes; ++w) items[w] = cl_uint(w);
+    // Largest first: the work-items take items in this order (kd_build_large_depth_first), so the
+    // last to start are the smallest and the compute units finish together.
+    std::stable_sort(items.begin(), items.end(),
+                     [&](cl_uint a, cl_uint b) { return refs[a] > refs[b]; });
     std::vector<Arenas> runs;
     DepthFirstResult result;
     for (int round = 0;; ++round) {
@@ -152,13 +164,15 @@ DepthFirstResult build_depth_first(BuildContext& ctx, const TriangleBounds& tria
         a.stacks =
             ctx.allocate<KdDepthFirstTask>(items.size() * KDRAY_DF_STACK, "depth-first stacks");
         a.counts = ctx.allocate<cl_uint>(items.size() * KDRAY_DF_COUNTS, "depth-first counts");
-        enqueue_per_item(ctx.device, ctx.kernels.build_depth_first, a.item_count, args,
-                         a.item_count, deep.node.buffer(), deep.ref_start.buffer(),
-                         deep.ref_count.buffer(), deep.ref_tri.buffer(), deep.ref_box.buffer(),
-                         triangles.triangles.buffer(), a.start.buffer(), a.work_tri.buffer(),
-                         a.work_box.buffer(), a.records.buffer(), a.roots.buffer(),
-                         a.small_tri.buffer(), a.small_box.buffer(), a.leaf_refs.buffer(),
-                         a.stacks.buffer(), a.counts.buffer());
+        a.next_item = ctx.allocate<cl_uint>(1, "depth-first item counter");
+        ctx.write(a.next_item, std::vector<cl_uint>{0});
+        enqueue_per_item(
+            ctx.device, ctx.kernels.build_depth_first, depth_first_workers(ctx, a.item_count), args,
+            a.item_count, deep.node.buffer(), deep.ref_start.buffer(), deep.ref_count.buffer(),
+            deep.ref_tri.buffer(), deep.ref_box.buffer(), triangles.triangles.buffer(),
+            a.start.buffer(), a.work_tri.buffer(), a.work_box.buffer(), a.records.buffer(),
+            a.roots.buffer(), a.small_tri.buffer(), a.small_box.buffer(), a.leaf_refs.buffer(),
+            a.stacks.buffer(), a.counts.buffer(), a.next_item.buffer());
         std::vector<cl_uint> run_counts(items.size() * KDRAY_DF_COUNTS);
         ctx.device.read(a.counts.buffer(), 0, run_counts.size() * sizeof(cl_uint),
                         run_counts.data(), "reading the depth-first subtrees' counts");

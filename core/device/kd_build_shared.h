@@ -259,10 +259,10 @@ typedef struct KdLargeLevelArgs {
 #define KDRAY_DF_COUNTS 6u
 
 /* KdDepthFirstArgs — 32 bytes. kd_build_large_depth_first's scalars: the deep roots (the length
- * of the arena starts' rows; a run's work-items are its items, build_large_depth_first.cl), the
- * depth limit, the large-node threshold T, empty_ratio C_e, the SAH
- * costs C_t, C_i and the empty-space bonus; ref_budget, the most references a subtree's nodes of
- * one depth may hold per reference of its root (the levels' budget per triangle). */
+ * of the arena starts' rows; the work-items take a run's items off a counter,
+ * build_large_depth_first.cl), the depth limit, the large-node threshold T, empty_ratio C_e, the
+ * SAH costs C_t, C_i and the empty-space bonus; ref_budget, the most references a subtree's
+ * nodes of one depth may hold per reference of its root (the levels' budget per triangle). */
 typedef struct KdDepthFirstArgs {
     kd_u32 nodes;
     kd_u32 max_depth;

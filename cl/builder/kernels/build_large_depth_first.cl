@@ -6,20 +6,20 @@
  * paper needs, on a CPU of a few cores it is memory traffic and command overhead. With this
  * schedule the levels hand every child of more than T and at most deep_refs references (a deep
  * root; cl/builder/large_depth_first.cpp picks the size: a core's cache, a few subtrees per
- * compute unit) to a list of their own, and here one work-item builds each deep root's whole
- * large subtree, depth first, down to its small roots and leaves: per node, one pass bins its
- * references for the SAH and one classifies, clips and partitions them, in the work-item's own
- * workspace, which stays in its core's cache. The rules are the level stage's own
- * (build_large_rules.cl, and build_large_sah.cl's bins and plane) and the references keep their
- * order, so the tree is the same node for node (tests/test_opencl_large_stage.cpp), unless a
- * reference budget makes leaves: the levels' and a subtree's (below) bound different sets of
- * nodes, so on input whose splits cut most triangles they may make different budget leaves.
- * On the 2-core PoCL CPU device the large stage takes 0.67-0.82 of the chunked levels' time
- * (docs/large-stage.md, measured at a54da79).
+ * compute unit) to a list of their own, and here a work-item builds each deep root's whole
+ * large subtree (on CPUs one after another, largest first), depth first, down to its small
+ * roots and leaves: per node, one pass bins its references for the SAH and one classifies,
+ * clips and partitions them, in the work-item's own workspace, which stays in its core's cache. The
+ * rules are the level stage's own (build_large_rules.cl, and build_large_sah.cl's bins and plane)
+ * and the references keep their order, so the tree is the same node for node
+ * (tests/test_opencl_large_stage.cpp), unless a reference budget makes leaves: the levels' and a
+ * subtree's (below) bound different sets of nodes, so on input whose splits cut most triangles they
+ * may make different budget leaves. On the 2-core PoCL CPU device the large stage takes 0.67-0.82
+ * of the chunked levels' time (docs/large-stage.md, measured at a54da79).
  *
- *   kd_build_large_depth_first   per deep root of the run: its subtree's records, small roots
- *                                (and their references) and leaf references, in arenas of its
- *                                own
+ *   kd_build_large_depth_first   the deep roots of the run, taken one at a time off a counter:
+ *                                each subtree's records, small roots (and their references) and
+ *                                leaf references, in arenas of its own
  *   kd_commit_depth_first        per deep root of a run that fitted: the arenas copied into the
  *                                build's stores, ids made global, and its KdLargeRegion for the
  *                                output stage
@@ -117,8 +117,8 @@ KDRAY_HOT_INLINE uint2 kd_df_partition(uint b, uint n, const uint axis, float sp
     for (uint r = b; r < b + n; ++r) {
         const uint tri = work_tri[r];
         const KdBox box = kd_load_box(work_box, r);
-        uint sides = kd_classify(kd_axis_of(box.lo, axis), kd_axis_of(box.hi, axis), split,
-                                 KDRAY_BELOW);
+        uint sides =
+            kd_classify(kd_axis_of(box.lo, axis), kd_axis_of(box.hi, axis), split, KDRAY_BELOW);
         KdBox to_below = box, to_above = box;
         if (sides == (KDRAY_BELOW | KDRAY_ABOVE)) {
             const uint entered =
@@ -155,21 +155,19 @@ KDRAY_INLINE uint kd_depth_first_root(__global const uint* arena, uint nodes, ui
     return arena[KDRAY_DF_KINDS * (nodes + 1) + item];
 }
 
-/* Work-item g builds deep root w = the run's item g (its references root_ref_start[w] ..,
- * root_ref_count[w] of them, its box, record id and depth in deep_root[w]) and its whole large
- * subtree: records, small roots, leaves. counts[g * KDRAY_DF_COUNTS + k]: what it used of arena k
- * (records: with its root), and at KDRAY_DF_WORK the arenas that ran out (bits), at
- * KDRAY_DF_BUDGET_LEAVES the budget leaves. */
-__kernel void kd_build_large_depth_first(
-    KdDepthFirstArgs args, uint items, __global const KdLargeNode* deep_root,
+/* Item g of a run builds deep root w = kd_depth_first_root(arena, args.nodes, g) (its references
+ * root_ref_start[w] .., root_ref_count[w] of them, its box, record id and depth in deep_root[w])
+ * and its whole large subtree: records, small roots, leaves. counts[g * KDRAY_DF_COUNTS + k]: what
+ * it used of arena k (records: with its root), and at KDRAY_DF_WORK the arenas that ran out
+ * (bits), at KDRAY_DF_BUDGET_LEAVES the budget leaves. */
+KDRAY_INLINE void kd_build_deep_root(
+    uint g, KdDepthFirstArgs args, __global const KdLargeNode* deep_root,
     __global const uint* root_ref_start, __global const uint* root_ref_count,
     __global const uint* ref_tri, __global const float* ref_box, __global const float* triangles,
     __global const uint* arena, __global uint* work_tri, __global float* work_box,
     __global KdBuildNode* records, __global KdSmallRoot* roots, __global uint* small_tri,
     __global float* small_box, __global uint* leaf_refs, __global KdDepthFirstTask* stacks,
     __global uint* counts) {
-    const uint g = get_global_id(0);
-    if (g >= items) return;
     const uint w = kd_depth_first_root(arena, args.nodes, g);
     KdArenas a;
     for (uint k = 0; k < KDRAY_DF_KINDS; ++k) {
@@ -213,12 +211,12 @@ __kernel void kd_build_large_depth_first(
         KdLargeCuts cuts;
         kd_empty_space_cuts(&box, tight, t.depth, args.max_depth, args.empty_ratio, &cuts);
         uint self = t.record;
-        for (uint g = 0; g < cuts.count; ++g) {
+        for (uint cut = 0; cut < cuts.count; ++cut) {
             const uint id = kd_arena_take(&a, KDRAY_DF_RECORDS, 2);
             if (a.full) break;
-            const uint code = cuts.code[g], keep_above = code & 1u;
+            const uint code = cuts.code[cut], keep_above = code & 1u;
             rec[id] = kd_build_leaf(0, 0);
-            rec[self] = kd_build_inner(code >> 1, cuts.pos[g], keep_above ? id : id + 1,
+            rec[self] = kd_build_inner(code >> 1, cuts.pos[cut], keep_above ? id : id + 1,
                                        keep_above ? id + 1 : id);
             self = id + 1;
         }
@@ -232,8 +230,8 @@ __kernel void kd_build_large_depth_first(
         {
             uint bins[KDRAY_BIN_VALUES];
             kd_bin_references(wb, b, b + n, tight, bins);
-            kd_best_binned_plane(box, tight, bins, n, args.cost_traversal,
-                                 args.cost_intersection, args.empty_bonus, &axis, &pos);
+            kd_best_binned_plane(box, tight, bins, n, args.cost_traversal, args.cost_intersection,
+                                 args.empty_bonus, &axis, &pos);
         }
 #endif
         const uint child_depth = t.depth + cuts.count + 1;
@@ -284,8 +282,8 @@ __kernel void kd_build_large_depth_first(
                              child + side);
                 end += count;
             } else if (count > 0) {
-                kd_df_small_root(&a, at, count, child_box, child_depth, child + side, wt, wb,
-                                 rec, roots, small_tri, small_box);
+                kd_df_small_root(&a, at, count, child_box, child_depth, child + side, wt, wb, rec,
+                                 roots, small_tri, small_box);
                 if (a.full) break;
             } else {
                 rec[child + side] = kd_build_leaf(0, 0);
@@ -297,6 +295,27 @@ __kernel void kd_build_large_depth_first(
     for (uint k = 1; k < KDRAY_DF_KINDS; ++k) out[k] = a.used[k];
     out[KDRAY_DF_WORK] = a.full;
     out[KDRAY_DF_BUDGET_LEAVES] = budget_leaves;
+}
+
+/* The run's items (the host lists them largest first) taken one at a time off next_item, which
+ * the host sets to 0, by however many work-items the device runs (one per compute unit on CPUs):
+ * a work-item that finishes a small subtree takes the next, so that the cores end together
+ * whatever the device's scheduler does with work-groups. Handing out one item per work-item left
+ * the split to the scheduler: PoCL gives each thread a contiguous half of the work-groups, which
+ * balanced the Kitchen's 4 subtrees of up to 64k references badly (and any order by size
+ * worse). */
+__kernel void kd_build_large_depth_first(
+    KdDepthFirstArgs args, uint items, __global const KdLargeNode* deep_root,
+    __global const uint* root_ref_start, __global const uint* root_ref_count,
+    __global const uint* ref_tri, __global const float* ref_box, __global const float* triangles,
+    __global const uint* arena, __global uint* work_tri, __global float* work_box,
+    __global KdBuildNode* records, __global KdSmallRoot* roots, __global uint* small_tri,
+    __global float* small_box, __global uint* leaf_refs, __global KdDepthFirstTask* stacks,
+    __global uint* counts, __global uint* next_item) {
+    for (uint g = atomic_inc(next_item); g < items; g = atomic_inc(next_item))
+        kd_build_deep_root(g, args, deep_root, root_ref_start, root_ref_count, ref_tri, ref_box,
+                           triangles, arena, work_tri, work_box, records, roots, small_tri,
+                           small_box, leaf_refs, stacks, counts);
 }
 
 /* Work-item g commits deep root w = item g of a run (whose arenas, starts and counts it is
@@ -311,9 +330,8 @@ __kernel void kd_commit_depth_first(
     __global const KdBuildNode* rec_arena, __global const KdSmallRoot* root_arena,
     __global const uint* small_tri_arena, __global const float* small_box_arena,
     __global const uint* leaf_arena, __global KdBuildNode* records,
-    __global KdSmallRoot* small_roots, __global uint* small_ref_tri,
-    __global float* small_ref_box, __global uint* small_ref_root, __global uint* leaf_store,
-    __global KdLargeRegion* regions) {
+    __global KdSmallRoot* small_roots, __global uint* small_ref_tri, __global float* small_ref_box,
+    __global uint* small_ref_root, __global uint* leaf_store, __global KdLargeRegion* regions) {
     const uint g = get_global_id(0);
     if (g >= items) return;
     __global const uint* used = counts + (size_t)g * KDRAY_DF_COUNTS;
@@ -326,7 +344,7 @@ __kernel void kd_commit_depth_first(
     const uint lref_base = base[KDRAY_DF_LEAF_REFS * nodes + w];
 #define KD_ARENA(kind) arena[(kind) * (nodes + 1) + w]
     /* Record j of the arena: the subtree's root first, the others from rec_base on. */
-#define KD_GLOBAL_ID(j) ((j) == 0 ? root_id : rec_base + (j) - 1)
+#define KD_GLOBAL_ID(j) ((j) == 0 ? root_id : rec_base + (j)-1)
     for (uint j = 0; j < used[KDRAY_DF_RECORDS]; ++j) {
         KdBuildNode r = rec_arena[KD_ARENA(KDRAY_DF_RECORDS) + j];
         if (r.axis == KDRAY_SMALL_ROOT_AXIS) {
