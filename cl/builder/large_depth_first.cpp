@@ -56,7 +56,7 @@ std::uint64_t arena_capacity(unsigned kind, std::uint64_t n, std::uint64_t thres
 
 /// The arena starts of a run (kd_depth_first_root, build_large_depth_first.cl): for every arena
 /// kind a row of nodes + 1 starts, from the sizes of the subtrees the run builds (the others get
-/// none), then the run's items, the deep roots it builds.
+/// none), then the run's items, the deep roots it builds, then 0: the count of items taken.
 std::vector<cl_uint> arena_starts(const std::vector<cl_uint>& refs, std::uint64_t threshold,
                                   const std::vector<std::array<int, KDRAY_DF_KINDS>>& grow,
                                   const std::vector<cl_uint>& items) {
@@ -73,19 +73,20 @@ std::vector<cl_uint> arena_starts(const std::vector<cl_uint>& refs, std::uint64_
         }
     }
     start.insert(start.end(), items.begin(), items.end());
+    start.push_back(0);  // the items the CPU shape's work-items have taken
     return start;
 }
 
 /// The arenas of one run of the depth-first kernel, kept until its subtrees are committed.
 struct Arenas {
     DeviceArray start, work_tri, work_box, records, roots, small_tri, small_box, leaf_refs, stacks,
-        counts, next_item;
+        counts;
     cl_uint item_count = 0;  // deep roots the run built
 };
 
-/* Work-items for a run of `items` subtrees: on a CPU one per compute unit, each taking subtree
- * after subtree off the kernel's counter; on a GPU one per subtree, since it runs them all at
- * once and a few looping work-items would leave it idle. */
+/* Work-items for a run of `items` subtrees, as the program's KDRAY_DEPTH_FIRST_WORKERS builds
+ * them (large_program_defines): on a CPU one per compute unit, each taking subtree after subtree
+ * off the kernel's counter; on a GPU one per subtree, since it runs them all at once. */
 std::size_t depth_first_workers(const BuildContext& ctx, std::size_t items) {
     if (!ctx.device.is_cpu()) return items;
     return std::min<std::size_t>(items, std::max(1u, ctx.device.info().compute_units));
@@ -164,15 +165,13 @@ DepthFirstResult build_depth_first(BuildContext& ctx, const TriangleBounds& tria
         a.stacks =
             ctx.allocate<KdDepthFirstTask>(items.size() * KDRAY_DF_STACK, "depth-first stacks");
         a.counts = ctx.allocate<cl_uint>(items.size() * KDRAY_DF_COUNTS, "depth-first counts");
-        a.next_item = ctx.allocate<cl_uint>(1, "depth-first item counter");
-        ctx.write(a.next_item, std::vector<cl_uint>{0});
         enqueue_per_item(
             ctx.device, ctx.kernels.build_depth_first, depth_first_workers(ctx, a.item_count), args,
             a.item_count, deep.node.buffer(), deep.ref_start.buffer(), deep.ref_count.buffer(),
             deep.ref_tri.buffer(), deep.ref_box.buffer(), triangles.triangles.buffer(),
             a.start.buffer(), a.work_tri.buffer(), a.work_box.buffer(), a.records.buffer(),
             a.roots.buffer(), a.small_tri.buffer(), a.small_box.buffer(), a.leaf_refs.buffer(),
-            a.stacks.buffer(), a.counts.buffer(), a.next_item.buffer());
+            a.stacks.buffer(), a.counts.buffer());
         std::vector<cl_uint> run_counts(items.size() * KDRAY_DF_COUNTS);
         ctx.device.read(a.counts.buffer(), 0, run_counts.size() * sizeof(cl_uint),
                         run_counts.data(), "reading the depth-first subtrees' counts");

@@ -149,8 +149,8 @@ KDRAY_HOT_INLINE uint2 kd_df_partition(uint b, uint n, const uint axis, float sp
 /* The arena starts of a run (kd_build_large_depth_first, kd_commit_depth_first): arena[k * (nodes
  * + 1) + w] is deep root w's first entry of arena kind k and the next root's is its end (a root
  * the run does not build has none); after them, from KDRAY_DF_KINDS * (nodes + 1) on, the run's
- * items, the deep roots it builds, one per work-item: every root in the first run, then only
- * those whose arenas ran out (cl/builder/large_depth_first.cpp). */
+ * items, the deep roots it builds: every root in the first run, then only those whose arenas ran
+ * out (cl/builder/large_depth_first.cpp); last, the count of items taken (0 from the host). */
 KDRAY_INLINE uint kd_depth_first_root(__global const uint* arena, uint nodes, uint item) {
     return arena[KDRAY_DF_KINDS * (nodes + 1) + item];
 }
@@ -297,22 +297,34 @@ KDRAY_INLINE void kd_build_deep_root(
     out[KDRAY_DF_BUDGET_LEAVES] = budget_leaves;
 }
 
-/* The run's items (the host lists them largest first) taken one at a time off next_item, which
- * the host sets to 0, by however many work-items the device runs (one per compute unit on CPUs):
- * a work-item that finishes a small subtree takes the next, so that the cores end together
- * whatever the device's scheduler does with work-groups. Handing out one item per work-item left
- * the split to the scheduler: PoCL gives each thread a contiguous half of the work-groups, which
- * balanced the Kitchen's 4 subtrees of up to 64k references badly (and any order by size
- * worse). */
+/* The run's items (the host lists them largest first), built by the program's shape of
+ * KDRAY_DEPTH_FIRST_WORKERS (large_program_defines):
+ *   1 (CPU devices): one work-item per compute unit, each taking item after item off the
+ *     counter after the items in arena, which the host sets to 0, so that a work-item that finishes
+ * a small subtree takes the next and the cores end together whatever the device's scheduler does
+ * with work-groups. With one work-item per item the split was the scheduler's: PoCL gives each
+ * thread a contiguous half of the work-groups, which balanced the Kitchen's subtrees by their order
+ *     alone (and any order by size worse).
+ *   0 (GPUs, which run every item at once): work-item g builds item g; the counter is unused. The
+ *     loop raised the kernel's AMD VGPRs from 134 to 248 (docs/gpu-kernels.md). */
+#ifndef KDRAY_DEPTH_FIRST_WORKERS
+#error "build_large.cl is built with -DKDRAY_DEPTH_FIRST_WORKERS=0 or 1 (build_context.cpp)"
+#endif
 __kernel void kd_build_large_depth_first(
     KdDepthFirstArgs args, uint items, __global const KdLargeNode* deep_root,
     __global const uint* root_ref_start, __global const uint* root_ref_count,
     __global const uint* ref_tri, __global const float* ref_box, __global const float* triangles,
-    __global const uint* arena, __global uint* work_tri, __global float* work_box,
+    __global uint* arena, __global uint* work_tri, __global float* work_box,
     __global KdBuildNode* records, __global KdSmallRoot* roots, __global uint* small_tri,
     __global float* small_box, __global uint* leaf_refs, __global KdDepthFirstTask* stacks,
-    __global uint* counts, __global uint* next_item) {
+    __global uint* counts) {
+#if KDRAY_DEPTH_FIRST_WORKERS
+    __global uint* next_item = arena + KDRAY_DF_KINDS * (args.nodes + 1) + items;
     for (uint g = atomic_inc(next_item); g < items; g = atomic_inc(next_item))
+#else
+    const uint g = get_global_id(0);
+    if (g < items)
+#endif
         kd_build_deep_root(g, args, deep_root, root_ref_start, root_ref_count, ref_tri, ref_box,
                            triangles, arena, work_tri, work_box, records, roots, small_tri,
                            small_box, leaf_refs, stacks, counts);
