@@ -21,7 +21,7 @@ std::vector<ProgramSpec> buildable_programs(bool cpu_device, bool correctly_roun
     std::set<int> bins{0, kMaxLargeSplitBins};
     for (BuildQuality q : {BuildQuality::Low, BuildQuality::Medium, BuildQuality::High})
         bins.insert(with_build_quality(BuildParams{}, q).large_split_bins);
-    for (int b : bins) add("build_large.cl", build_detail::large_program_defines(b, cpu_device));
+    for (int b : bins) add("build_large.cl", build_detail::large_program_defines(b));
     add("build_small.cl", build_detail::small_program_defines(cpu_device));
     add("build_output.cl", "");
 

@@ -13,8 +13,8 @@ BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins) {
     return cached_kernels<BuilderKernels>(device, std::to_string(large_split_bins), [&] {
         // -D only for compile-time choices; the layouts and constants are
         // core/device/kd_build_shared.h's.
-        const cl::Program large = cached_program(
-            device, "build_large.cl", large_program_defines(large_split_bins, device.is_cpu()));
+        const cl::Program large =
+            cached_program(device, "build_large.cl", large_program_defines(large_split_bins));
         const cl::Program small =
             cached_program(device, "build_small.cl", small_program_defines(device.is_cpu()));
         const cl::Program output = cached_program(device, "build_output.cl");
@@ -65,11 +65,8 @@ BuildContext::~BuildContext() {
     }
 }
 
-std::string large_program_defines(int large_split_bins, bool cpu_device) {
-    // CPU devices: the depth-first kernel's work-items loop over its subtrees
-    // (large_depth_first.cpp).
-    return "-DKDRAY_LARGE_BINS=" + std::to_string(large_split_bins) +
-           "u -DKDRAY_DEPTH_FIRST_WORKERS=" + (cpu_device ? "1" : "0");
+std::string large_program_defines(int large_split_bins) {
+    return "-DKDRAY_LARGE_BINS=" + std::to_string(large_split_bins) + "u";
 }
 
 std::string small_program_defines(bool cpu_device) {

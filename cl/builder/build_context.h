@@ -42,9 +42,9 @@ struct BuilderKernels {
 BuilderKernels& builder_kernels(const ClDevice& device, int large_split_bins);
 
 /// The -D options of the large stage's program (build_large.cl) for large_split_bins, and of the
-/// large and small stages' (build_small.cl) on a CPU device or not: the only compile-time choices
-/// of the builder's programs (cl/program_catalogue.cpp lists them all from here).
-std::string large_program_defines(int large_split_bins, bool cpu_device);
+/// small stage's (build_small.cl) on a CPU device or not: the only compile-time choices of the
+/// builder's programs (cl/program_catalogue.cpp lists them all from here).
+std::string large_program_defines(int large_split_bins);
 std::string small_program_defines(bool cpu_device);
 
 /// The device side of one build, shared by its stages.

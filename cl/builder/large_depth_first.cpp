@@ -84,9 +84,9 @@ struct Arenas {
     cl_uint item_count = 0;  // deep roots the run built
 };
 
-/* Work-items for a run of `items` subtrees, as the program's KDRAY_DEPTH_FIRST_WORKERS builds
- * them (large_program_defines): on a CPU one per compute unit, each taking subtree after subtree
- * off the kernel's counter; on a GPU one per subtree, since it runs them all at once. */
+/* Work-items for a run of `items` subtrees, which take them off the kernel's counter: on a CPU
+ * one per compute unit, each taking subtree after subtree; on a GPU one per subtree, since it
+ * runs them all at once. */
 std::size_t depth_first_workers(const BuildContext& ctx, std::size_t items) {
     if (!ctx.device.is_cpu()) return items;
     return std::min<std::size_t>(items, std::max(1u, ctx.device.info().compute_units));

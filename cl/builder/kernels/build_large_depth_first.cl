@@ -159,8 +159,9 @@ KDRAY_INLINE uint kd_depth_first_root(__global const uint* arena, uint nodes, ui
  * root_ref_start[w] .., root_ref_count[w] of them, its box, record id and depth in deep_root[w])
  * and its whole large subtree: records, small roots, leaves. counts[g * KDRAY_DF_COUNTS + k]: what
  * it used of arena k (records: with its root), and at KDRAY_DF_WORK the arenas that ran out
- * (bits), at KDRAY_DF_BUDGET_LEAVES the budget leaves. */
-KDRAY_INLINE void kd_build_deep_root(
+ * (bits), at KDRAY_DF_BUDGET_LEAVES the budget leaves. Always inlined: inlined as a plain
+ * static function it took the 32-bin program's AMD VGPRs from 132 to 248 (gpu_compile). */
+KDRAY_HOT_INLINE void kd_build_deep_root(
     uint g, KdDepthFirstArgs args, __global const KdLargeNode* deep_root,
     __global const uint* root_ref_start, __global const uint* root_ref_count,
     __global const uint* ref_tri, __global const float* ref_box, __global const float* triangles,
@@ -297,19 +298,13 @@ KDRAY_INLINE void kd_build_deep_root(
     out[KDRAY_DF_BUDGET_LEAVES] = budget_leaves;
 }
 
-/* The run's items (the host lists them largest first), built by the program's shape of
- * KDRAY_DEPTH_FIRST_WORKERS (large_program_defines):
- *   1 (CPU devices): one work-item per compute unit, each taking item after item off the
- *     counter after the items in arena, which the host sets to 0, so that a work-item that finishes
- * a small subtree takes the next and the cores end together whatever the device's scheduler does
- * with work-groups. With one work-item per item the split was the scheduler's: PoCL gives each
- * thread a contiguous half of the work-groups, which balanced the Kitchen's subtrees by their order
- *     alone (and any order by size worse).
- *   0 (GPUs, which run every item at once): work-item g builds item g; the counter is unused. The
- *     loop raised the kernel's AMD VGPRs from 134 to 248 (docs/gpu-kernels.md). */
-#ifndef KDRAY_DEPTH_FIRST_WORKERS
-#error "build_large.cl is built with -DKDRAY_DEPTH_FIRST_WORKERS=0 or 1 (build_context.cpp)"
-#endif
+/* The run's items (the host lists them largest first) taken one at a time off the counter after
+ * them in arena (0 from the host) by however many work-items the host launches: one per compute
+ * unit on CPUs, so that a work-item that finishes a small subtree takes the next and the cores
+ * end together whatever the device's scheduler does with work-groups; one per item on GPUs,
+ * which run them all at once. With one work-item per item on CPUs the split was the
+ * scheduler's: PoCL gives each thread a contiguous half of the work-groups, which balanced the
+ * Kitchen's subtrees by their order alone (and any order by size worse). */
 __kernel void kd_build_large_depth_first(
     KdDepthFirstArgs args, uint items, __global const KdLargeNode* deep_root,
     __global const uint* root_ref_start, __global const uint* root_ref_count,
@@ -318,13 +313,8 @@ __kernel void kd_build_large_depth_first(
     __global KdBuildNode* records, __global KdSmallRoot* roots, __global uint* small_tri,
     __global float* small_box, __global uint* leaf_refs, __global KdDepthFirstTask* stacks,
     __global uint* counts) {
-#if KDRAY_DEPTH_FIRST_WORKERS
     __global uint* next_item = arena + KDRAY_DF_KINDS * (args.nodes + 1) + items;
     for (uint g = atomic_inc(next_item); g < items; g = atomic_inc(next_item))
-#else
-    const uint g = get_global_id(0);
-    if (g < items)
-#endif
         kd_build_deep_root(g, args, deep_root, root_ref_start, root_ref_count, ref_tri, ref_box,
                            triangles, arena, work_tri, work_box, records, roots, small_tri,
                            small_box, leaf_refs, stacks, counts);
