@@ -73,7 +73,7 @@ std::vector<cl_uint> arena_starts(const std::vector<cl_uint>& refs, std::uint64_
         }
     }
     start.insert(start.end(), items.begin(), items.end());
-    start.push_back(0);  // the items the CPU shape's work-items have taken
+    start.push_back(0);  // the kernel's counter of items taken
     return start;
 }
 
