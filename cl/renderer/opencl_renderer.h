@@ -32,8 +32,10 @@ struct OpenClRenderChoice {
     /// The triangle test's exact steps in double (true) or float-float
     /// (core/device/kd_float_float.h).
     bool fp64 = true;
-    std::string pixel_kernel;  // kd_render_pixels or kd_shade_traced_pixels
-    bool cost = false;         // kd_trace_costs after the pixels (the cost AOV)
+    /// kd_render_pixels, kd_shade_traced_pixels, or kd_trace_shade_camera_packets (which traces
+    /// the packets' primary rays itself)
+    std::string pixel_kernel;
+    bool cost = false;  // kd_trace_costs after the pixels (the cost AOV)
 
     auto operator<=>(const OpenClRenderChoice&) const = default;
 };

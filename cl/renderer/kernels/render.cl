@@ -12,8 +12,10 @@
  *                            from that buffer when there is one, else they are traced here
  *   kd_shade_traced_pixels   one work-item per pixel of one sample whose hit is in that buffer,
  *                            shaded where no reflection or refraction follows
+ *   kd_trace_shade_camera_packets  (CPU devices) the first and the last in one work-item per
+ *                            tile, where no shadow packets come between them
  *
- * The packet kernels and kd_shade_traced_pixels exist only in programs built with
+ * The packet kernels and the shading of their hits exist only in programs built with
  * -DKDRAY_COMPILED_PACKETS=1 (CPU devices, opencl_renderer.cpp): a packet work-item holds 35-37 KB
  * of private arrays, most of the program, which a GPU, running one ray per lane, never launches.
  *
@@ -96,6 +98,25 @@ KDRAY_INLINE KdPacketRays kd_primary_packet(const KdView* view, kd_packet_uint x
     return rays;
 }
 
+/* Ray r (kd_primary_ray) of the pixels of the tile whose top left pixel is (x0, row0) of the
+ * launch's rows, traced as one packet: the rays in *rays, lane i's hit in out[i]; lane i is pixel
+ * (x0 + i % KDRAY_PACKET_TILE_WIDTH, row0 + i / KDRAY_PACKET_TILE_WIDTH). */
+KDRAY_HOT_INLINE void kd_trace_camera_tile(__global const KdNode* nodes,
+                                           __global const kd_u32* leaf_indices,
+                                           __global const float* triangles,
+                                           const KdRenderLaunch* launch, kd_u32 x0, kd_u32 row0,
+                                           kd_u32 r, KdPacketRays* rays, KdHit* out) {
+    const KdView v = launch->view;
+    float box[6];
+    for (int i = 0; i < 6; ++i) box[i] = launch->bounds[i];
+    const kd_packet_uint lane = KDRAY_PACKET_LANE_INDEX;
+    const kd_packet_uint x = x0 + lane % KDRAY_PACKET_TILE_WIDTH,
+                         row = row0 + lane / KDRAY_PACKET_TILE_WIDTH;
+    const kd_packet_int valid = (x < v.width) & (row < launch->rows);
+    *rays = kd_primary_packet(&v, x, launch->first_row + row, r, valid);
+    kd_trace_packet(nodes, leaf_indices, triangles, box, rays, 0, out);
+}
+
 /* Work-item (tile x, tile y, primary ray r) traces ray r (kd_primary_ray) of the tile's pixels,
  * rows first_row.. first_row + rows of the image (the launch's), into
  * hits[r * rows * width + pixel], pixel counted from first_row. */
@@ -106,25 +127,16 @@ __kernel void kd_trace_camera_packets(__global const KdNode* nodes,
     const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE_WIDTH;
     const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE_ROWS;
     const kd_u32 r = (kd_u32)get_global_id(2);
-    const kd_u32 rows = launch.rows;
-    if (x0 >= launch.view.width || row0 >= rows || r >= kd_primary_rays_per_pixel(&launch.view))
-        return;
-    const KdView v = launch.view;
-    float box[6];
-    for (int i = 0; i < 6; ++i) box[i] = launch.bounds[i];
-    /* Lane i: pixel (x0 + i % KDRAY_PACKET_TILE_WIDTH, row0 + i / KDRAY_PACKET_TILE_WIDTH). */
-    const kd_packet_uint lane = KDRAY_PACKET_LANE_INDEX;
-    const kd_packet_uint x = x0 + lane % KDRAY_PACKET_TILE_WIDTH,
-                         row = row0 + lane / KDRAY_PACKET_TILE_WIDTH;
-    const kd_packet_int valid = (x < v.width) & (row < rows);
-    const KdPacketRays rays = kd_primary_packet(&v, x, launch.first_row + row, r, valid);
+    const kd_u32 rows = launch.rows, width = launch.view.width;
+    if (x0 >= width || row0 >= rows || r >= kd_primary_rays_per_pixel(&launch.view)) return;
+    KdPacketRays rays;
     KdHit out[KDRAY_PACKET_LANES];
-    kd_trace_packet(nodes, leaf_indices, triangles, box, &rays, 0, out);
-    __global KdHit* plane = hits + (size_t)r * rows * v.width;
+    kd_trace_camera_tile(nodes, leaf_indices, triangles, &launch, x0, row0, r, &rays, out);
+    __global KdHit* plane = hits + (size_t)r * rows * width;
     for (int i = 0; i < KDRAY_PACKET_LANES; ++i) {
         const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE_WIDTH);
         const kd_u32 ri = row0 + (kd_u32)(i / KDRAY_PACKET_TILE_WIDTH);
-        if (xi < v.width && ri < rows) plane[(size_t)ri * v.width + xi] = out[i];
+        if (xi < width && ri < rows) plane[(size_t)ri * width + xi] = out[i];
     }
 }
 
@@ -222,6 +234,32 @@ __kernel void kd_trace_shadow_packets(__global const KdNode* nodes,
 #endif
 #endif /* KDRAY_COMPILED_PACKETS */
 
+/* The one sample of a pixel, its primary ray (kd_primary_ray's) and that ray's hit *hit, shaded
+ * by kd_trace_direct_sample alone (blocked: the lights kd_trace_shadow_packets found blocked from
+ * it, or 0 where the shading casts its own shadow rays). */
+KDRAY_HOT_INLINE void kd_direct_pixel(const KdSceneView* scene, const KdView* view,
+                                      const KdRay* primary, const KdHit* hit,
+                                      __global const kd_u32* blocked, KdPixel* pixel) {
+    pixel->rays.primary = pixel->rays.shadow = 0u;
+    pixel->rays.reflection = pixel->rays.refraction = pixel->rays.area_shadow = 0u;
+    kd_trace_direct_sample(scene, view, primary, hit, blocked, 0, pixel->rgb, &pixel->rays,
+                           &pixel->centre_hit, pixel->normal);
+}
+
+/* Pixel (x, y)'s results into the frame's buffers (normals as launch->outputs asks). */
+KDRAY_INLINE void kd_store_pixel(const KdRenderLaunch* launch, kd_u32 x, kd_u32 y,
+                                 const KdPixel* pixel, __global float* rgb, __global KdHit* hits,
+                                 __global float* normals, __global KdRayCounts* ray_counts) {
+    const size_t i = (size_t)y * launch->view.width + x;
+    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = pixel->rgb[c];
+    if (launch->outputs & KDRAY_RENDER_NORMALS)
+        for (int c = 0; c < 3; ++c) normals[3 * i + c] = pixel->normal[c];
+    hits[i] = pixel->centre_hit;
+#if KDRAY_COMPILED_EFFECTS != 0
+    ray_counts[i] = pixel->rays;
+#endif
+}
+
 /* The work-item of pixel (get_global_id(0), first_row + get_global_id(1)), for both pixel kernels
  * below. direct_only: the pixel's one sample, whose primary hit is in traced, shaded by
  * kd_trace_direct_sample alone; a constant in each kernel, so that kd_shade_traced_pixels holds
@@ -246,25 +284,15 @@ KDRAY_HOT_INLINE void kd_pixel_work_item(
     KdPixel pixel;
     if (direct_only) {
         const KdHit hit = traced[in_launch];
-        pixel.rays.primary = pixel.rays.shadow = pixel.rays.reflection = pixel.rays.refraction = 0u;
-        pixel.rays.area_shadow = 0u;
         KdRay primary;
         kd_primary_ray(view, x, y, 0u, &primary);
-        kd_trace_direct_sample(&scene, view, &primary, &hit, blocked, 0, pixel.rgb, &pixel.rays,
-                               &pixel.centre_hit, pixel.normal);
+        kd_direct_pixel(&scene, view, &primary, &hit, blocked, &pixel);
     } else {
         kd_render_pixel(&scene, view, x, y,
                         (outputs & KDRAY_RENDER_TRACED_PRIMARY) ? traced + in_launch : 0, blocked,
                         rows * view->width, &pixel);
     }
-    const size_t i = (size_t)y * view->width + x;
-    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = pixel.rgb[c];
-    if (outputs & KDRAY_RENDER_NORMALS)
-        for (int c = 0; c < 3; ++c) normals[3 * i + c] = pixel.normal[c];
-    hits[i] = pixel.centre_hit;
-#if KDRAY_COMPILED_EFFECTS != 0
-    ray_counts[i] = pixel.rays;
-#endif
+    kd_store_pixel(launch, x, y, &pixel, rgb, hits, normals, ray_counts);
 }
 
 /* One pixel per work-item; launch.outputs: KDRAY_RENDER_* bits. With KDRAY_RENDER_TRACED_PRIMARY
@@ -314,5 +342,46 @@ __kernel void kd_shade_traced_pixels(__global const KdNode* nodes,
                                      __global const kd_u32* occluded) {
     kd_pixel_work_item(nodes, leaf_indices, triangles, scene_data, &layout, &launch, rgb, hits,
                        normals, ray_counts, traced, occluded, 1);
+}
+
+/* kd_trace_camera_packets and kd_shade_traced_pixels in one work-item, for frames of one sample
+ * per pixel whose shading casts no secondary rays and whose shadow rays (if any) are not traced
+ * as packets: the tile's primary rays as one packet, then each of its pixels shaded from its
+ * lane's hit, which never goes through a buffer. The hits and the image are the two kernels'
+ * bit for bit (the same functions on the same values); the buffer's 16 bytes per pixel, written
+ * by one kernel and read back cold by the next, cost the bunny's primary frame about a tenth of
+ * its trace. A work-item per tile, as the packet kernels launch. */
+__kernel void kd_trace_shade_camera_packets(
+    __global const KdNode* nodes, __global const kd_u32* leaf_indices,
+    __global const float* triangles, __global const uchar* scene_data, const KdSceneLayout layout,
+    const KdRenderLaunch launch, __global float* rgb, __global KdHit* hits, __global float* normals,
+    __global KdRayCounts* ray_counts) {
+    const kd_u32 x0 = (kd_u32)get_global_id(0) * KDRAY_PACKET_TILE_WIDTH;
+    const kd_u32 row0 = (kd_u32)get_global_id(1) * KDRAY_PACKET_TILE_ROWS;
+    const kd_u32 rows = launch.rows, width = launch.view.width;
+    if (x0 >= width || row0 >= rows || get_global_id(2) != 0) return;
+    KdPacketRays rays;
+    KdHit traced[KDRAY_PACKET_LANES];
+    kd_trace_camera_tile(nodes, leaf_indices, triangles, &launch, x0, row0, 0u, &rays, traced);
+    /* Each lane's ray is kd_primary_ray's for its pixel bit for bit (kd_primary_packet). */
+    float dir[3][KDRAY_PACKET_LANES];
+    for (int a = 0; a < 3; ++a) kd_packet_vstore(rays.dir[a], 0, dir[a]);
+    KdSceneView scene;
+    kd_scene_view(nodes, leaf_indices, triangles, scene_data, &layout, &launch, &scene);
+    for (int i = 0; i < KDRAY_PACKET_LANES; ++i) {
+        const kd_u32 xi = x0 + (kd_u32)(i % KDRAY_PACKET_TILE_WIDTH);
+        const kd_u32 ri = row0 + (kd_u32)(i / KDRAY_PACKET_TILE_WIDTH);
+        if (xi >= width || ri >= rows) continue;
+        KdRay primary;
+        for (int a = 0; a < 3; ++a) {
+            primary.org[a] = launch.view.origin[a];
+            primary.dir[a] = dir[a][i];
+        }
+        primary.tmin = 0.0f;
+        primary.tmax = KDRAY_INF;
+        KdPixel pixel;
+        kd_direct_pixel(&scene, &launch.view, &primary, &traced[i], 0, &pixel);
+        kd_store_pixel(&launch, xi, launch.first_row + ri, &pixel, rgb, hits, normals, ray_counts);
+    }
 }
 #endif /* KDRAY_COMPILED_PACKETS */
