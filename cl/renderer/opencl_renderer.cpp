@@ -354,10 +354,12 @@ FrameResult render_opencl(ClDevice& device, OpenClRenderPlan& plan, const KdTree
     b.counts = device.allocate(count_rays ? pixels * sizeof(KdRayCounts) : 1, "ray counts");
     b.costs =
         device.allocate(inputs.cost ? pixels * sizeof(KdTraceCost) : 1, "centre ray walk costs");
-    // The primary hits of one launch's rows (all of its pixels' primary rays), when packets trace
-    // them; in-order queue, so one buffer serves every launch.
+    // The primary hits of one launch's rows (all of its pixels' primary rays), when a packet
+    // kernel traces them for another to shade (kd_trace_shade_camera_packets keeps its own);
+    // in-order queue, so one buffer serves every launch.
+    const bool hits_between_kernels = packets && plan.choice.pixel_kernel != kTraceAndShade;
     const std::size_t traced_rays = step * view.width * kd_primary_rays_per_pixel(&view);
-    b.traced = device.allocate(packets ? traced_rays * sizeof(KdHit) : sizeof(KdHit),
+    b.traced = device.allocate(hits_between_kernels ? traced_rays * sizeof(KdHit) : sizeof(KdHit),
                                "primary hit buffer");
     // ... and, beside each, the lights its shadow rays find blocked.
     b.occluded = device.allocate(shadow_packets ? traced_rays * sizeof(kd_u32) : sizeof(kd_u32),

@@ -55,7 +55,9 @@ typedef uint8 kd_packet_uint;
 
 /* Whether any lane of a mask (each lane 0 or -1) is set. OpenCL's any() is, in PoCL, a chain of
  * shuffles with a branch per step; a reduction of the lanes' sign bits compiles to a mask test. */
-#if defined(__clang__) && defined(__has_builtin)
+/* KDRAY_PACKET_PORTABLE_ANY: OpenCL's any() alone, for Oclgrind 21.10, which has no
+ * llvm.vector.reduce.or (tests/oclgrind_check.py's packet cases). */
+#if defined(__clang__) && defined(__has_builtin) && !defined(KDRAY_PACKET_PORTABLE_ANY)
 #if __has_builtin(__builtin_reduce_or)
 #define KDRAY_PACKET_ANY(m) (__builtin_reduce_or((m) < 0) != 0)
 #endif
