@@ -3,7 +3,8 @@
 
 PoCL checks no memory access, so a kernel that writes past its buffer corrupts a neighbour in
 silence there. Oclgrind checks every access, reports races and uninitialised values, and reports
-itself as a GPU, so kdray takes its GPU paths (the per-level small stage, no packet kernels).
+itself as a GPU, so kdray takes its GPU paths (the per-level small stage, no packets unless
+`--packets on` asks for them: the packet cases do).
 
 Each case renders a small generated scene (a few hundred triangles, 32x24 pixels) with kdray
 under Oclgrind and passes only when
@@ -15,7 +16,8 @@ under Oclgrind and passes only when
     its pixels (the OpenCL and CPU shading differ in float rounding only).
 
 Oclgrind runs with --data-races --check-api (its checks of every memory access are always on),
-on the program as drivers compile it (optimised). Not with --uninitialized: Oclgrind 21.10's
+on the program as drivers compile it (optimised; the packet cases not, see CASE_BUILD_OPTIONS).
+Not with --uninitialized: Oclgrind 21.10's
 (Debian 12's) uninitialised-value plugin mishandles shufflevector masks with undefined elements
 (Uninitialized.cpp compares the mask value with llvm::Value::UndefValueVal instead of -1), and
 clang emits such a shuffle for every float3 stored as four lanes or widened to a float8: in an
@@ -39,6 +41,7 @@ from pathlib import Path
 WIDTH, HEIGHT = 32, 24
 IMAGE_TOLERANCE = 2.0 / 255.0
 IMAGE_MAX_FRACTION = 0.01
+MIN_HIT_PIXELS = 40  # of the reference's, per frame
 REPORT_MARKERS = ("Invalid ", "data race", "Uninitialized", "Oclgrind - ", "error generated",
                   "errors generated", "Unhandled", "Undefined external", "Work-group divergence",
                   "barrier divergence", "OCLGRIND", "Oclgrind:")
@@ -151,9 +154,12 @@ def camera(position, look_at, fov=50):
     return {"position": list(position), "look_at": list(look_at), "up": [0, 1, 0], "fov_y": fov}
 
 
-def render_file(cam, **extra):
+POINT_LIGHT = {"type": "point", "position": [3, 8, 30], "intensity": [900, 900, 900]}
+
+
+def render_file(cam, lights=(POINT_LIGHT,), **extra):
     r = {"image": {"width": WIDTH, "height": HEIGHT, "spp": 1}, "camera": cam,
-         "lights": [{"type": "point", "position": [3, 8, 30], "intensity": [900, 900, 900]}]}
+         "lights": list(lights)}
     r.update(extra)
     return r
 
@@ -229,9 +235,9 @@ def path_scene(folder):
     return objs, folder / "path.json"
 
 
-def geometry_scene(folder, name, tris, eye, target):
+def geometry_scene(folder, name, tris, eye, target, lights=(POINT_LIGHT,), fov=50):
     write(folder / f"{name}.obj", obj_text(tris))
-    write(folder / f"{name}.json", json.dumps(render_file(camera(eye, target))))
+    write(folder / f"{name}.json", json.dumps(render_file(camera(eye, target, fov), lights)))
     return [folder / f"{name}.obj"], folder / f"{name}.json"
 
 
@@ -240,25 +246,31 @@ def animation(folder):
     frames = []
     for k in range(3):
         tris = [tuple(tuple(p[i] * (1 + 0.2 * k) for i in range(3)) for p in t)
-                for t in clusters()[::2]]
+                for t in clusters()]
         write(folder / f"frame_{k:03d}.obj", obj_text(tris))
         frames.append(folder / f"frame_{k:03d}.obj")
-    r = render_file([dict(frame=0, **camera((0, 0, 60), (0, 0, 0))),
-                     dict(frame=2, **camera((10, 5, 70), (0, 0, 0), 45))])
+    # The clusters' camera, scaled with the scene: each frame sees its cluster the same way.
+    r = render_file([dict(frame=0, **camera((-18, -18, 5), (-18, -18, 2), 60)),
+                     dict(frame=2, **camera((-25.2, -25.2, 7), (-25.2, -25.2, 2.8), 60))])
     write(folder / "anim.json", json.dumps(r))
     return frames, folder / "anim.json"
 
 
 def scenes(work):
     return {
-        "clusters": lambda: geometry_scene(work / "clusters", "clusters", clusters(), (0, 0, 60),
-                                           (0, 0, 0)),
+        # From inside one cluster's box: the others' triangles are too small to hit from afar.
+        "clusters": lambda: geometry_scene(work / "clusters", "clusters", clusters(),
+                                           (-18, -18, 5), (-18, -18, 2), fov=60),
         "coplanar": lambda: geometry_scene(work / "coplanar", "coplanar", coplanar(), (4, 3, 12),
                                            (0, 0, 0)),
+        # No lights: primary packets traced and shaded by one kernel (kd_trace_shade_camera_packets).
+        "coplanar-unlit": lambda: geometry_scene(work / "coplanar-unlit", "coplanar", coplanar(),
+                                                 (4, 3, 12), (0, 0, 0), lights=()),
         "coincident": lambda: geometry_scene(work / "coincident", "coincident", coincident(),
                                              (0, 2, 14), (0, 0, 0)),
-        "slivers": lambda: geometry_scene(work / "slivers", "slivers", slivers(), (1.5, 0.5, 6),
-                                          (1.5, 0.5, 0.5)),
+        # Close to the slivers: from afar they and the small triangles are thinner than a pixel.
+        "slivers": lambda: geometry_scene(work / "slivers", "slivers", slivers(), (2.5, 0.5, 1.6),
+                                          (2.5, 0.5, 0.5), fov=60),
         "effects": lambda: effects_scene(work / "effects"),
         "path": lambda: path_scene(work / "path"),
         "anim": lambda: animation(work / "anim"),
@@ -310,6 +322,10 @@ CASES = {
     "effects": ("effects", []),
     "path": ("path", []),
     "anim": ("anim", ["--quality", "medium"]),
+    # Primary rays as packets, which kdray takes by default on CPU devices only: one kernel that
+    # traces and shades (no lights), and camera packets, shadow packets and shading in three.
+    "packets-trace-and-shade": ("coplanar-unlit", ["--packets", "on", "--quality", "low"]),
+    "packets-with-shadows": ("coplanar", ["--packets", "on", "--quality", "low"]),
     "reference-builder": ("coplanar", ["--builder", "reference"]),
     "reference-tracer": ("clusters", ["--tracer", "reference", "--quality", "high"]),
     # A device with NVIDIA's limits (256 work-items a group, 48 KiB of local memory), and one
@@ -319,6 +335,29 @@ CASES = {
     "local-32k": ("clusters", ["--small-stage", "per-level"],
                   ["--max-wgsize", "256", "--local-mem-size", "32768"]),
 }
+
+
+# Build options Oclgrind adds for a case (OCLGRIND_BUILD_OPTIONS). The packet walk's
+# __builtin_reduce_or becomes llvm.vector.reduce.or, which Oclgrind 21.10 cannot run:
+# KDRAY_PACKET_PORTABLE_ANY makes it OpenCL's any(). Optimised, the packet kernels also hold
+# llvm.experimental.noalias.scope.decl, which the simulator lacks, hence -cl-opt-disable.
+PACKET_BUILD_OPTIONS = "-cl-opt-disable -DKDRAY_PACKET_PORTABLE_ANY=1"
+CASE_BUILD_OPTIONS = {"packets-trace-and-shade": PACKET_BUILD_OPTIONS,
+                      "packets-with-shadows": PACKET_BUILD_OPTIONS}
+
+# Packet cases, and whether their shadow rays go as packets too: stats.json must say they did.
+PACKET_CASES = {"packets-trace-and-shade": False, "packets-with-shadows": True}
+
+
+def packet_failures(name, stats_path):
+    packets = json.loads(stats_path.read_text())["frames"][0]["packets"]
+    failures = []
+    if not packets.get("primary"):
+        failures.append("primary rays did not go as packets")
+    if packets.get("shadow", False) != PACKET_CASES[name]:
+        failures.append(f"shadow packets {packets.get('shadow')}, the case wants "
+                        f"{PACKET_CASES[name]}")
+    return failures
 
 
 # Cases whose depth-first stage must run its kernel again for some subtrees, not all: else the
@@ -356,8 +395,14 @@ def check_case(kdray, work, name, built):
     r = run(base + ["--builder", "reference", "--tracer", "reference", "-o", str(ref)])
     if r.returncode != 0:
         return [f"reference render failed: {r.stderr.strip()}"]
+    hits = [f.get("hit_pixels", 0) for f in json.loads((ref / "stats.json").read_text())["frames"]]
+    if min(hits) < MIN_HIT_PIXELS:
+        return [f"the camera hits {min(hits)} pixels of a frame (at least {MIN_HIT_PIXELS} "
+                "wanted): the hit comparison would check next to nothing"]
     env = dict(os.environ)
-    runs = [("optimised", ["--data-races", "--check-api", *sum(device_limits, [])], "")]
+    build_options = CASE_BUILD_OPTIONS.get(name, "")
+    label = "unoptimised" if "-cl-opt-disable" in build_options else "optimised"
+    runs = [(label, ["--data-races", "--check-api", *sum(device_limits, [])], build_options)]
     for label, flags, build_options in runs:
         env["OCLGRIND_BUILD_OPTIONS"] = build_options
         got = out / label
@@ -369,6 +414,8 @@ def check_case(kdray, work, name, built):
             continue
         if name in RERUN_CASES:
             failures += [f"{label}: {f}" for f in rerun_failures(got / "stats.json")]
+        if name in PACKET_CASES:
+            failures += [f"{label}: {f}" for f in packet_failures(name, got / "stats.json")]
         for obj in objs:
             stem = obj.stem
             c = run([str(kdray), "compare", str(got / f"{stem}.aov.exr"),
