@@ -3,7 +3,8 @@
 run, with the same camera and thread count.
 
 1. Primary rays, per scene: Mrays/s of kdray's OpenCL tracer (render file without lights and
-   max_depth 1, so only centre rays are cast) against embree_ref's, median over --repeat frames.
+   max_depth 1, materials without emission, so only centre rays are cast: the script checks
+   stats.json's ray counts) against embree_ref's, median over --repeat frames.
 2. Dynamic scenes (the BART Kitchen and Robots frames, horse poses, testdata/anim): mean frame time
    of kdray (OpenCL build + trace, primary rays, 1024x768) against Embree medium's build + trace of
    the same frames with the same keyframed cameras; three rounds of both sides in turn, each
@@ -72,6 +73,15 @@ def kdray_frames(kdray, objs, render_json, out_dir):
         return json.load(f)["frames"]
 
 
+def write_without_emission(mtl, out_path):
+    """The material library with every Ke zeroed: an emitter would make kdray cast area-light
+    shadow rays from each hit, which the peer does not, and the rows compare primary rays only."""
+    with open(mtl, errors="replace") as f:
+        lines = [("Ke 0 0 0\n" if line.split()[:1] == ["Ke"] else line) for line in f]
+    with open(out_path, "w") as f:
+        f.writelines(lines)
+
+
 def primary_rays(kdray, peer, repeat, scenes, tmp):
     rows = []
     for name, obj, camera in scenes:
@@ -81,13 +91,17 @@ def primary_rays(kdray, peer, repeat, scenes, tmp):
         shutil.rmtree(frames_dir, ignore_errors=True)
         os.makedirs(frames_dir)
         for mtl in (f for f in os.listdir(os.path.dirname(obj)) if f.endswith(".mtl")):
-            os.symlink(os.path.join(os.path.dirname(obj), mtl), os.path.join(frames_dir, mtl))
+            write_without_emission(os.path.join(os.path.dirname(obj), mtl),
+                                   os.path.join(frames_dir, mtl))
         objs = []
         for k in range(repeat):
             link = os.path.join(frames_dir, f"f_{k}.obj")
             os.symlink(obj, link)
             objs.append(link)
         frames = kdray_frames(kdray, objs, render, os.path.join(tmp, "out"))
+        extra = {k: v for k, v in frames[0]["rays"].items() if k != "primary" and v}
+        if extra:
+            raise SystemExit(f"bench_render: {name}: kdray cast more than primary rays {extra}")
         row = {"scene": name, "triangles": frames[0]["scene"]["triangles"],
                "kdray_mrays_per_s": median([f["mrays_per_s"] for f in frames]),
                "kdray_trace_ms": median([f["trace_ms"] for f in frames]),
@@ -204,7 +218,7 @@ def main():
     lines = ["# Render benchmark", "",
              f"Run {record['date']} at {record['commit']} on {record['machine']}; "
              f"Embree with {THREADS} threads.", "",
-             "## Primary rays (1 per pixel centre, no shading beyond a headlight)", "",
+             "## Primary rays (1 per pixel centre, no shading beyond a headlight; emitters turned off)", "",
              "| scene | triangles | kdray OpenCL Mrays/s | Embree Mrays/s | kdray / Embree |",
              "|---|---:|---:|---:|---:|"]
     for r in prim:
