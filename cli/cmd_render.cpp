@@ -331,6 +331,8 @@ int run_render(const RenderCommand& command) {
 
     DeviceSession session(command.builder.device);
     say_when_no_gpu(session, command.builder.device);
+    if (command.tracer == "opencl" && command.packets == "on" && command.intersect == "watertight")
+        say_packets_off_cpu(session);
     const std::unique_ptr<TreeBuilder> builder =
         make_tree_builder(command.builder.builder, build_params, session);
     const std::unique_ptr<Tracer> tracer = make_tracer(command.tracer, command.threads, session);

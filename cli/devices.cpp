@@ -41,4 +41,20 @@ void say_when_no_gpu(DeviceSession& session, const std::string& selector) {
     };
 }
 
+void say_packets_off_cpu(DeviceSession& session) {
+    session.opened = [before = session.opened](const ClDevice& device) {
+        if (before) before(device);
+        if (device.is_cpu()) return;
+        // Measured by scripts/gpu_compile.py on the 8-lane packet programs: 17,152-17,728 bytes
+        // of private memory per work-item for nvptx, 19,040-19,776 for amdgcn, against a budget
+        // of 4096; a GPU spills them to global memory.
+        spdlog::warn(
+            "--packets on: packets are a CPU path (a work-item traces 8 rays in vector "
+            "registers, about 17-20 KB of private memory per work-item on GPUs); on the {} "
+            "device '{}' they run, that memory spilled, where --packets auto would trace one "
+            "ray per work-item",
+            device.info().type, device.info().name);
+    };
+}
+
 }  // namespace kdray::cli

@@ -18,4 +18,8 @@ nlohmann::json list_devices_json();
 /// one info line says so: the device's name alone did not tell a user that no GPU was found.
 void say_when_no_gpu(DeviceSession& session, const std::string& selector);
 
+/// `--packets on` on a device that is not a CPU: the packets run there as asked, but they are
+/// built for a CPU's vector registers, so say what they cost (docs/gpu-kernels.md's budgets).
+void say_packets_off_cpu(DeviceSession& session);
+
 }  // namespace kdray::cli

@@ -416,6 +416,9 @@ def check_case(kdray, work, name, built):
             failures += [f"{label}: {f}" for f in rerun_failures(got / "stats.json")]
         if name in PACKET_CASES:
             failures += [f"{label}: {f}" for f in packet_failures(name, got / "stats.json")]
+            # Oclgrind reports a GPU: kdray must say that packets are a CPU path there.
+            if "--packets on: packets are a CPU path" not in r.stderr:
+                failures.append(f"{label}: no warning that packets are a CPU path")
         for obj in objs:
             stem = obj.stem
             c = run([str(kdray), "compare", str(got / f"{stem}.aov.exr"),
