@@ -218,7 +218,8 @@ def main():
     lines = ["# Render benchmark", "",
              f"Run {record['date']} at {record['commit']} on {record['machine']}; "
              f"Embree with {THREADS} threads.", "",
-             "## Primary rays (1 per pixel centre, no shading beyond a headlight; emitters turned off)", "",
+             "## Primary rays (1 per pixel centre, no shading beyond a headlight; emitters "
+             "turned off)", "",
              "| scene | triangles | kdray OpenCL Mrays/s | Embree Mrays/s | kdray / Embree |",
              "|---|---:|---:|---:|---:|"]
     for r in prim:

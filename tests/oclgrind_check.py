@@ -16,7 +16,7 @@ under Oclgrind and passes only when
     its pixels (the OpenCL and CPU shading differ in float rounding only).
 
 Oclgrind runs with --data-races --check-api (its checks of every memory access are always on),
-on the program as drivers compile it (optimised; the packet cases not, see CASE_BUILD_OPTIONS).
+on the program as drivers compile it (optimised; the packet cases not, see PACKET_BUILD_OPTIONS).
 Not with --uninitialized: Oclgrind 21.10's
 (Debian 12's) uninitialised-value plugin mishandles shufflevector masks with undefined elements
 (Uninitialized.cpp compares the mask value with llvm::Value::UndefValueVal instead of -1), and
@@ -337,15 +337,15 @@ CASES = {
 }
 
 
-# Build options Oclgrind adds for a case (OCLGRIND_BUILD_OPTIONS). The packet walk's
+# Build options Oclgrind adds for the packet cases (OCLGRIND_BUILD_OPTIONS). The packet
+# walk's
 # __builtin_reduce_or becomes llvm.vector.reduce.or, which Oclgrind 21.10 cannot run:
 # KDRAY_PACKET_PORTABLE_ANY makes it OpenCL's any(). Optimised, the packet kernels also hold
 # llvm.experimental.noalias.scope.decl, which the simulator lacks, hence -cl-opt-disable.
 PACKET_BUILD_OPTIONS = "-cl-opt-disable -DKDRAY_PACKET_PORTABLE_ANY=1"
-CASE_BUILD_OPTIONS = {"packets-trace-and-shade": PACKET_BUILD_OPTIONS,
-                      "packets-with-shadows": PACKET_BUILD_OPTIONS}
 
-# Packet cases, and whether their shadow rays go as packets too: stats.json must say they did.
+# Packet cases (built with PACKET_BUILD_OPTIONS), and whether their shadow rays go as packets
+# too: stats.json must say they did.
 PACKET_CASES = {"packets-trace-and-shade": False, "packets-with-shadows": True}
 
 
@@ -400,9 +400,10 @@ def check_case(kdray, work, name, built):
         return [f"the camera hits {min(hits)} pixels of a frame (at least {MIN_HIT_PIXELS} "
                 "wanted): the hit comparison would check next to nothing"]
     env = dict(os.environ)
-    build_options = CASE_BUILD_OPTIONS.get(name, "")
-    label = "unoptimised" if "-cl-opt-disable" in build_options else "optimised"
-    runs = [(label, ["--data-races", "--check-api", *sum(device_limits, [])], build_options)]
+    packets = name in PACKET_CASES
+    runs = [("unoptimised" if packets else "optimised",
+             ["--data-races", "--check-api", *sum(device_limits, [])],
+             PACKET_BUILD_OPTIONS if packets else "")]
     for label, flags, build_options in runs:
         env["OCLGRIND_BUILD_OPTIONS"] = build_options
         got = out / label
@@ -414,7 +415,7 @@ def check_case(kdray, work, name, built):
             continue
         if name in RERUN_CASES:
             failures += [f"{label}: {f}" for f in rerun_failures(got / "stats.json")]
-        if name in PACKET_CASES:
+        if packets:
             failures += [f"{label}: {f}" for f in packet_failures(name, got / "stats.json")]
             # Oclgrind reports a GPU: kdray must say that packets are a CPU path there.
             if "--packets on: packets are a CPU path" not in r.stderr:
