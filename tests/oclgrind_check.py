@@ -338,8 +338,7 @@ CASES = {
 
 
 # Build options Oclgrind adds for the packet cases (OCLGRIND_BUILD_OPTIONS). The packet
-# walk's
-# __builtin_reduce_or becomes llvm.vector.reduce.or, which Oclgrind 21.10 cannot run:
+# walk's __builtin_reduce_or becomes llvm.vector.reduce.or, which Oclgrind 21.10 cannot run:
 # KDRAY_PACKET_PORTABLE_ANY makes it OpenCL's any(). Optimised, the packet kernels also hold
 # llvm.experimental.noalias.scope.decl, which the simulator lacks, hence -cl-opt-disable.
 PACKET_BUILD_OPTIONS = "-cl-opt-disable -DKDRAY_PACKET_PORTABLE_ANY=1"
