@@ -156,9 +156,13 @@ ChannelStats channel_stats(const Image& image, int c, double expected,
 /// contribution in one pixel). The spread itself is bounded by `max_relative_sd` of the
 /// radiance, so that a noisy estimator cannot pass by its wide error bars. mean_only: the mean
 /// alone, for low-discrepancy samples (pixels are still independent estimates, each with its own
-/// rotation of the sequence, but not normally distributed ones).
+/// rotation of the sequence, but not normally distributed ones). repeat: the same render with
+/// samples of its own, for estimators with a heavy tail (below), where a pixel is wrong only
+/// when it is that far off in both renders: a lost or doubled contribution is the pixel's in
+/// every render, a rare long path in one.
 void check_furnace(const Image& image, int max_depth, double max_relative_sd,
-                   const std::vector<bool>* in = nullptr, bool mean_only = false) {
+                   const std::vector<bool>* in = nullptr, bool mean_only = false,
+                   const Image* repeat = nullptr) {
     for (int c = 0; c < 3; ++c) {
         CAPTURE(c);
         const double expected = furnace_radiance(c, max_depth);
@@ -171,8 +175,21 @@ void check_furnace(const Image& image, int max_depth, double max_relative_sd,
         CHECK(std::fabs(s.mean - expected) <=
               4 * s.pixel_sd / std::sqrt(s.pixels) + 1e-6 * expected);
         if (mean_only) continue;
-        CHECK(s.worst <= 6 * s.pixel_sd + 1e-6 * expected);
         CHECK(s.pixel_sd <= max_relative_sd * expected);
+        const double far = 6 * s.pixel_sd + 1e-6 * expected;
+        if (!repeat) {
+            CHECK(s.worst <= far);
+            continue;
+        }
+        const ChannelStats r = channel_stats(*repeat, c, expected, in);
+        CHECK(r.pixel_sd <= max_relative_sd * expected);
+        const double repeat_far = 6 * r.pixel_sd + 1e-6 * expected;
+        int far_in_both = 0;
+        for (std::size_t i = 0; i < image.rgb.size() / 3; ++i)
+            if ((!in || (*in)[i]) && std::fabs(image.rgb[3 * i + c] - expected) > far &&
+                std::fabs(repeat->rgb[3 * i + c] - expected) > repeat_far)
+                ++far_in_both;
+        CHECK(far_in_both == 0);
     }
 }
 
@@ -228,6 +245,15 @@ TEST_CASE("path: glass and a mirror in the furnace change nothing: Le / (1 - a) 
     REQUIRE(inputs.effects.reflection);
     const FrameResult host = render_reference(tree, scene, inputs, 2);
     CHECK(host.rays.refraction > 0);
+    // Paths trapped in the faceted glass ball by total internal reflection keep their
+    // throughput, which roulette's survival of 0.95 raises by 1/0.95 a segment, and leave it
+    // after tens of segments with several times their weight: one sample of 47 where the pixel
+    // is 2. At 64 samples a pixel, a wall pixel lay more than 6 standard deviations off in 4 of
+    // 16 seeds with the path's earlier random numbers and in 5 of 16 with today's, so the worst
+    // pixel must be that far off in a second render too, of samples of its own (seed 1007:
+    // independent sample r of seed k hashes r + k, so nearby seeds share samples), to count.
+    const FrameResult repeat = render_reference(
+        tree, scene, prepare_render(scene, settings, settings.camera_at(0, scene.frame), 1007), 2);
     // The wall's pixels and the balls' (by the centre ray's triangle: the wall's come first) have
     // errors of different sizes, paths through glass more (their Fresnel choice, and roulette
     // sooner), so each group is held to its own spread.
@@ -238,8 +264,8 @@ TEST_CASE("path: glass and a mirror in the furnace change nothing: Le / (1 - a) 
         balls[i] = !wall[i];
     }
     REQUIRE(std::count(balls.begin(), balls.end(), true) > 50);
-    check_furnace(host.image, -1, 0.1, &wall);
-    check_furnace(host.image, -1, 0.2, &balls);
+    check_furnace(host.image, -1, 0.1, &wall, false, &repeat.image);
+    check_furnace(host.image, -1, 0.2, &balls, false, &repeat.image);
 }
 
 TEST_CASE("path: at max_depth 2 a mirror shows what its one bounce sees (Mitsuba's count)") {

@@ -62,6 +62,25 @@ KDRAY_INLINE kd_u32 kd_pick_emitter(KDRAY_GLOBAL const KdEmitter* emitters, kd_u
     return lo;
 }
 
+/* An emitter and the numbers (u1, u2) of a point on it from one pair of the sample's dimensions
+ * (the next whole pair: an odd dimension left over is skipped): the first coordinate picks the
+ * emitter and, stretched over the emitter's interval of the CDF, becomes u1 (pbrt's reuse of a
+ * sample); the second is u2. So a pixel's samples are stratified over the emitters and the points
+ * on them together. */
+KDRAY_HOT_INLINE KDRAY_GLOBAL const KdEmitter* kd_pick_emitter_pair(const KdSceneView* scene,
+                                                                    const KdView* view,
+                                                                    KdSampleRandom* random,
+                                                                    kd_f32* u1, kd_f32* u2) {
+    random->dimension = (random->dimension + 1u) & ~1u;
+    const kd_f32 u = kd_sample_uniform(random);
+    *u2 = kd_sample_uniform(random);
+    const kd_u32 i = kd_pick_emitter(scene->emitters, view->emitter_count, u);
+    KDRAY_GLOBAL const KdEmitter* e = scene->emitters + i;
+    const kd_f32 below = i > 0u ? scene->emitters[i - 1u].cdf : 0.0f;
+    *u1 = KDRAY_FMIN((u - below) / e->probability, 0.99999994f);
+    return e;
+}
+
 /* What a light sample sees of emitter triangle `tri` from p: the point at the square-root warp of
  * (u1, u2) (pbrt's uniform point on a triangle) and the shadow ray toward it, from ng's side of p
  * (as kd_shadow_ray starts it, so that the ray stops short of the emitter by ray_epsilon, whatever
@@ -71,8 +90,8 @@ KDRAY_INLINE kd_u32 kd_pick_emitter(KDRAY_GLOBAL const KdEmitter* emitters, kd_u
  * integrator's (kd_path.h) both take their point here. */
 KDRAY_HOT_INLINE int kd_emitter_point(KDRAY_GLOBAL const kd_f32* tri, const kd_f32* p,
                                       const kd_f32* ng, kd_f32 ray_epsilon, kd_f32 u1, kd_f32 u2,
-                                      KdRay* shadow, kd_f32* to_light, kd_f32* d2,
-                                      kd_f32* distance, kd_f32* cos_light, kd_f32* twice_area) {
+                                      KdRay* shadow, kd_f32* to_light, kd_f32* d2, kd_f32* distance,
+                                      kd_f32* cos_light, kd_f32* twice_area) {
     const kd_f32 su = KDRAY_SQRT(u1);
     const kd_f32 b1 = su * (1.0f - u2), b2 = su * u2, b0 = 1.0f - su;
     for (int a = 0; a < 3; ++a) {
@@ -104,17 +123,7 @@ KDRAY_HOT_INLINE void kd_area_light(const KdSceneView* scene, const KdView* view
     KDRAY_GLOBAL const KdEmitter* e;
     kd_f32 u1, u2;
     if (random) {
-        /* One pair of dimensions for the emitter and the point on it, so that the pixel's
-         * samples are stratified over both: the first coordinate picks the emitter and, stretched
-         * over the emitter's interval of the CDF, places the point with the second (pbrt's
-         * reuse of a sample). */
-        random->dimension = (random->dimension + 1u) & ~1u;
-        const kd_f32 u = kd_sample_uniform(random);
-        u2 = kd_sample_uniform(random);
-        const kd_u32 i = kd_pick_emitter(scene->emitters, view->emitter_count, u);
-        e = scene->emitters + i;
-        const kd_f32 below = i > 0u ? scene->emitters[i - 1u].cdf : 0.0f;
-        u1 = KDRAY_FMIN((u - below) / e->probability, 0.99999994f);
+        e = kd_pick_emitter_pair(scene, view, random, &u1, &u2);
     } else {
         const kd_u32 h0 = kd_shading_key(view, p, dir), h1 = kd_hash(h0), h2 = kd_hash(h1);
         e = scene->emitters +
@@ -126,8 +135,8 @@ KDRAY_HOT_INLINE void kd_area_light(const KdSceneView* scene, const KdView* view
         scene->triangles + (size_t)e->triangle * KDRAY_FLOATS_PER_TRIANGLE;
     KdRay shadow;
     kd_f32 to_light[3], d2, distance, cos_light, twice_area;
-    if (!kd_emitter_point(tri, p, ng, view->ray_epsilon, u1, u2, &shadow, to_light, &d2,
-                          &distance, &cos_light, &twice_area))
+    if (!kd_emitter_point(tri, p, ng, view->ray_epsilon, u1, u2, &shadow, to_light, &d2, &distance,
+                          &cos_light, &twice_area))
         return;
     const kd_f32 cos_l = kd_light_cosine(ng, ns, to_light);
     if (cos_l <= 0.0f) return;

@@ -19,7 +19,10 @@
  * pixel's R2 sequence (kd_shading.h), rotated by a hash of the pixel's key and of i / 2: a
  * function of (pixel, s, i) alone, so that the host and a kernel draw the same numbers along the
  * same path whatever order they trace pixels in, and a pixel's samples are stratified in each
- * pair of dimensions (the light sample's point, the lobe's direction).
+ * pair of dimensions. Each vertex has pairs of its own (KDRAY_PATH_DIMENSIONS_PER_VERTEX), one for
+ * its light sample's emitter and point, one for its lobe and direction, so that those 2D choices
+ * are stratified as points: with three numbers each, an event's pair straddled two pairs, and the
+ * light's point (u1, u2) took coordinates of two unrelated sequences.
  */
 #ifndef KDRAY_KD_PATH_H
 #define KDRAY_KD_PATH_H
@@ -34,6 +37,9 @@
 /* A path survives roulette with probability min(its largest throughput channel, this): below 1,
  * so that a path of throughput 1 (a white mirror room) still ends. */
 #define KDRAY_PATH_MAX_SURVIVAL 0.95f
+/* The dimensions a path vertex draws: its light sample's pair, its lobes' pair, and the first
+ * coordinate of a third pair for roulette. */
+#define KDRAY_PATH_DIMENSIONS_PER_VERTEX 6u
 /* The path integrator's numbers' own key (kd_sample_random). */
 #define KDRAY_PATH_SALT 0x68E31DA4u
 
@@ -169,23 +175,21 @@ KDRAY_HOT_INLINE void kd_path_delta_lights(const KdSceneView* scene, const KdVie
     }
 }
 
-/* One light sample of the emitters at p, as kd_area_light draws it (an emitter by power, a
- * uniform point on it, a shadow ray), weighted by the power heuristic against the lobes'
- * sampling of the same direction, into out. */
+/* One light sample of the emitters at p, as kd_area_light draws it (an emitter by power and a
+ * uniform point on it from one pair of dimensions, a shadow ray), weighted by the power heuristic
+ * against the lobes' sampling of the same direction, into out. */
 KDRAY_HOT_INLINE void kd_path_area_light(const KdSceneView* scene, const KdView* view,
                                          const KdPathLobes* l, const kd_f32* p, const kd_f32* ng,
-                                         const kd_f32* ns, const kd_f32* dir, KdSampleRandom* random,
-                                         kd_f32* out, KdRayCounts* rays) {
-    const kd_f32 u0 = kd_sample_uniform(random), u1 = kd_sample_uniform(random);
-    const kd_f32 u2 = kd_sample_uniform(random);
-    KDRAY_GLOBAL const KdEmitter* e =
-        scene->emitters + kd_pick_emitter(scene->emitters, view->emitter_count, u0);
+                                         const kd_f32* ns, const kd_f32* dir,
+                                         KdSampleRandom* random, kd_f32* out, KdRayCounts* rays) {
+    kd_f32 u1, u2;
+    KDRAY_GLOBAL const KdEmitter* e = kd_pick_emitter_pair(scene, view, random, &u1, &u2);
     KDRAY_GLOBAL const kd_f32* tri =
         scene->triangles + (size_t)e->triangle * KDRAY_FLOATS_PER_TRIANGLE;
     KdRay shadow;
     kd_f32 to_light[3], d2, distance, cos_light, twice_area;
-    if (!kd_emitter_point(tri, p, ng, view->ray_epsilon, u1, u2, &shadow, to_light, &d2,
-                          &distance, &cos_light, &twice_area))
+    if (!kd_emitter_point(tri, p, ng, view->ray_epsilon, u1, u2, &shadow, to_light, &d2, &distance,
+                          &cos_light, &twice_area))
         return;
     const kd_f32 cos_l = kd_light_cosine(ng, ns, to_light);
     if (cos_l <= 0.0f) return;
@@ -216,14 +220,28 @@ KDRAY_HOT_INLINE int kd_path_sample_lobes(const KdSceneView* scene, const KdView
                                           const kd_f32* p, const kd_f32* ng, const kd_f32* ns,
                                           const kd_f32* dir, KdSampleRandom* random, KdRay* next,
                                           kd_f32* factor, kd_f32* pdf) {
-    const kd_f32 u = kd_sample_uniform(random), u1 = kd_sample_uniform(random);
-    const kd_f32 u2 = kd_sample_uniform(random);
+    /* One pair of dimensions: the first coordinate picks the lobe and, stretched over the lobe's
+     * share, becomes u1 (as kd_pick_emitter_pair reuses its number), so that the direction
+     * (u1, u2) is stratified over the pixel's samples as a 2D point. */
+    random->dimension = (random->dimension + 1u) & ~1u;
+    const kd_f32 u = kd_sample_uniform(random), u2 = kd_sample_uniform(random);
+    const kd_f32 diffuse_end = l->p_diffuse, gloss_end = diffuse_end + l->p_gloss;
+    const kd_f32 mirror_end = gloss_end + l->p_mirror;
+    const kd_f32 lobe_start =
+        u < diffuse_end ? 0.0f
+                        : (u < gloss_end ? diffuse_end : (u < mirror_end ? gloss_end : mirror_end));
+    const kd_f32 lobe_share =
+        u < diffuse_end
+            ? l->p_diffuse
+            : (u < gloss_end ? l->p_gloss : (u < mirror_end ? l->p_mirror : l->p_glass));
+    const kd_f32 u1 =
+        lobe_share > 0.0f ? KDRAY_FMIN((u - lobe_start) / lobe_share, 0.99999994f) : 0.0f;
     kd_f32 wi[3];
     next->tmin = 0.0f;
     next->tmax = KDRAY_INF;
     *pdf = 0.0f;
-    if (u < l->p_diffuse + l->p_gloss) {
-        if (u < l->p_diffuse) {
+    if (u < gloss_end) {
+        if (u < diffuse_end) {
             /* Cosine-weighted about ns (Malley's method). */
             const kd_f32 r = KDRAY_SQRT(u1);
             kd_f32 sin_phi, cos_phi;
@@ -252,7 +270,7 @@ KDRAY_HOT_INLINE int kd_path_sample_lobes(const KdSceneView* scene, const KdView
         }
         return 1;
     }
-    const int glass = u >= l->p_diffuse + l->p_gloss + l->p_mirror;
+    const int glass = u >= mirror_end;
     if (glass && !(l->p_glass > 0.0f)) return 0; /* no lobe at all: u fell past every share */
     /* Mirror and glass as kd_trace_sample turns them: the same eta and the same normal. */
     kd_f32 eta = 0.0f;
@@ -352,6 +370,11 @@ KDRAY_HOT_INLINE void kd_trace_path_sample(const KdSceneView* scene, const KdVie
         }
         if (segments >= view->max_depth) return;
 
+        /* Each vertex draws from dimensions of its own, whichever events it has: its light
+         * sample's pair, its lobes' pair, and roulette's number, so that a pair means the same
+         * event at the same depth in every sample of the pixel. */
+        random->dimension = (segments - 1u) * KDRAY_PATH_DIMENSIONS_PER_VERTEX;
+
         /* Next events: the lights, one more segment each. */
         KdPathLobes lobes;
         kd_path_lobes(scene, view, m, hit, &lobes);
@@ -365,6 +388,7 @@ KDRAY_HOT_INLINE void kd_trace_path_sample(const KdSceneView* scene, const KdVie
         }
 
         /* The next segment, drawn from the lobes. */
+        random->dimension = (segments - 1u) * KDRAY_PATH_DIMENSIONS_PER_VERTEX + 2u;
         kd_f32 factor[3];
         KdRay next;
         const int kind = kd_path_sample_lobes(scene, view, m, tri, &lobes, p, ng, ns, ray.dir,
@@ -376,6 +400,7 @@ KDRAY_HOT_INLINE void kd_trace_path_sample(const KdSceneView* scene, const KdVie
         /* Russian roulette: an unbiased end to paths whose throughput has fallen. */
         if (segments >= KDRAY_PATH_ROULETTE_DEPTH) {
             const kd_f32 survive = KDRAY_FMIN(largest, KDRAY_PATH_MAX_SURVIVAL);
+            random->dimension = (segments - 1u) * KDRAY_PATH_DIMENSIONS_PER_VERTEX + 4u;
             if (kd_sample_uniform(random) >= survive) return;
             for (int c = 0; c < 3; ++c) beta[c] /= survive;
         }
