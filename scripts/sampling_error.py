@@ -31,8 +31,10 @@ SPPS = [1, 4, 16, 64, 256]
 CHANGE = ("Before: commit 7c7ed41, independent hashes per sample and dimension, Whitted's area-light "
           "samples hashes of the shading point; after: each pixel's samples low-discrepancy (the R2 "
           "sequence, rotated per pixel), each pair of dimensions taking the pixel's points in an "
-          "order of its own (a hash permutation of the sample indices), and Whitted's area-light "
-          "samples following the pixel's sequence (docs/path-tracing.md, kd_shading.h).")
+          "order of its own (a hash permutation of the sample indices), each path vertex's light "
+          "sample (emitter and point) and lobe (choice and direction) from a pair of their own, "
+          "and Whitted's area-light samples following the pixel's sequence (docs/path-tracing.md, "
+          "kd_shading.h).")
 
 
 def scenes():
