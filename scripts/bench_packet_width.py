@@ -8,7 +8,10 @@ the median over rounds of each run's median over --repeat warm frames. Both widt
 the same image (every lane is the scalar walk).
 
   scripts/bench_packet_width.py [--kdray build/kdray] [--peer EMBREE_REF] [--rounds 3]
-                                [--repeat 5] [--out docs/packet-width]
+                                [--repeat 5] [--scene bunny/bunny.obj] [--out docs/packet-width]
+
+--scene: another of ../shared's scenes (its folder's render.json): dense meshes of tiny
+triangles, such as dragon/dragon_res2.obj, are where the narrower packet may win.
 
 Writes OUT.json (every round's figures, the command, the machine, the device and its native float
 width) and OUT.md. Needs ../shared (the scene); without it, says so and exits 77.
@@ -76,11 +79,12 @@ def main():
     parser.add_argument("--peer", default="", help="embree_ref (default: build the peer)")
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--scene", default=SCENE, help="under ../shared/scenes")
     parser.add_argument("--out", default=os.path.join(ROOT, "docs", "packet-width"))
     args = parser.parse_args()
-    obj = os.path.join(SHARED, "scenes", SCENE)
+    obj = os.path.join(SHARED, "scenes", args.scene)
     if not os.path.isfile(obj):
-        print(f"bench_packet_width: skipped: no {SCENE} under {SHARED}/scenes")
+        print(f"bench_packet_width: skipped: no {args.scene} under {SHARED}/scenes")
         return 77
     peer = args.peer or build_peer()
     device = run_json([args.kdray, "stats", "--json"]).get("devices", [{}])[0].get("name", "?")
@@ -116,7 +120,7 @@ def main():
                       lanes16_x_embree=ratio("kdray_lanes16", "embree"))
     first = runs["kdray_lanes16"][0]
     record = dict(run_record(args.kdray), device=device,
-                  native_float_width=native_float_width(), scene=SCENE,
+                  native_float_width=native_float_width(), scene=args.scene,
                   triangles=first["triangles"], primary_rays=first["primary_rays"],
                   rounds=args.rounds, repeat=args.repeat, threads=THREADS,
                   load_average=[round(load_before, 2), round(os.getloadavg()[0], 2)],
@@ -128,7 +132,7 @@ def main():
              f"OpenCL device: PoCL '{device}', float vector width (preferred / native, clinfo): "
              f"{record['native_float_width'] or 'unknown'}; kdray's automatic choice there is the "
              "native width (16 on AVX-512, 8 on AVX2).", "",
-             f"{SCENE} ({record['triangles']} triangles), its render file's camera and size "
+             f"{args.scene} ({record['triangles']} triangles), its render file's camera and size "
              f"({record['primary_rays']} primary rays, no lights, max_depth 1), warm "
              f"(`--warm-up`); medians over {args.rounds} rounds of each run's median over "
              f"{args.repeat} frames; Embree 3 medium's primary rays in the same rounds "
