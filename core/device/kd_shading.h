@@ -107,8 +107,10 @@ KDRAY_INLINE kd_f32 kd_dot3(const kd_f32* a, const kd_f32* b) {
     ((1.0f - 2.0f * (py) / (kd_f32)(view)->height) * (view)->tan_half_fov)
 #define KDRAY_CAMERA_DIR(view, a, sx, sy) \
     ((view)->forward[a] + ((view)->right[a] * (sx) + (view)->up[a] * (sy)))
+/* The seed hashed before it meets r: with r + seed, sample r of seed k was sample r - 1 of seed
+ * k + 1, and renders of nearby seeds (frames) shared all but one of their samples. */
 #define KDRAY_SAMPLE_KEY(view, x, y, r) \
-    (((y) * (view)->width + (x)) * 0x9E3779B9u ^ kd_hash((r) + (view)->seed))
+    (((y) * (view)->width + (x)) * 0x9E3779B9u ^ kd_hash((r) ^ kd_hash((view)->seed)))
 #define KDRAY_PIXEL_KEY(view, x, y) (((y) * (view)->width + (x)) * 0x9E3779B9u ^ (view)->seed)
 /* A pixel's samples are low-discrepancy (#30): sample s's numbers in a pair of dimensions are the
  * R2 sequence's point s (Roberts 2018: the Kronecker sequence of the plastic number g, steps 1/g
@@ -261,9 +263,8 @@ KDRAY_HOT_INLINE kd_f32 kd_sample_uniform(KdSampleRandom* r) {
 KDRAY_INLINE void kd_sample_random(const KdView* view, kd_u32 x, kd_u32 y, kd_u32 s, kd_u32 salt,
                                    KdSampleRandom* r) {
     r->independent = view->sampler == KDRAY_SAMPLER_INDEPENDENT;
-    r->key =
-        kd_hash((r->independent ? KDRAY_SAMPLE_KEY(view, x, y, s) : KDRAY_PIXEL_KEY(view, x, y)) ^
-                salt);
+    r->key = kd_hash(
+        (r->independent ? KDRAY_SAMPLE_KEY(view, x, y, s) : KDRAY_PIXEL_KEY(view, x, y)) ^ salt);
     r->sample = s;
     r->count = view->spp;
     r->dimension = 0u;
