@@ -64,8 +64,8 @@ KDRAY_INLINE kd_u32 kd_pick_emitter(KDRAY_GLOBAL const KdEmitter* emitters, kd_u
 
 /* An emitter and the numbers (u1, u2) of a point on it from one pair of the sample's dimensions
  * (the next whole pair: an odd dimension left over is skipped): the first coordinate picks the
- * emitter and, stretched over the emitter's interval of the CDF, becomes u1 (pbrt's reuse of a
- * sample); the second is u2. So a pixel's samples are stratified over the emitters and the points
+ * emitter and, stretched over the emitter's interval of the CDF (kd_stretch_chosen), becomes u1;
+ * the second is u2. So a pixel's samples are stratified over the emitters and the points
  * on them together. */
 KDRAY_HOT_INLINE KDRAY_GLOBAL const KdEmitter* kd_pick_emitter_pair(const KdSceneView* scene,
                                                                     const KdView* view,
@@ -77,7 +77,7 @@ KDRAY_HOT_INLINE KDRAY_GLOBAL const KdEmitter* kd_pick_emitter_pair(const KdScen
     const kd_u32 i = kd_pick_emitter(scene->emitters, view->emitter_count, u);
     KDRAY_GLOBAL const KdEmitter* e = scene->emitters + i;
     const kd_f32 below = i > 0u ? scene->emitters[i - 1u].cdf : 0.0f;
-    *u1 = KDRAY_FMIN((u - below) / e->probability, 0.99999994f);
+    *u1 = kd_stretch_chosen(u, below, e->probability);
     return e;
 }
 

@@ -220,22 +220,26 @@ KDRAY_HOT_INLINE int kd_path_sample_lobes(const KdSceneView* scene, const KdView
                                           const kd_f32* p, const kd_f32* ng, const kd_f32* ns,
                                           const kd_f32* dir, KdSampleRandom* random, KdRay* next,
                                           kd_f32* factor, kd_f32* pdf) {
-    /* One pair of dimensions: the first coordinate picks the lobe and, stretched over the lobe's
-     * share, becomes u1 (as kd_pick_emitter_pair reuses its number), so that the direction
-     * (u1, u2) is stratified over the pixel's samples as a 2D point. */
-    random->dimension = (random->dimension + 1u) & ~1u;
+    /* One pair of dimensions (the caller's): the first coordinate picks the lobe and, stretched
+     * over the lobe's share (kd_stretch_chosen), becomes u1, so that the direction (u1, u2) is
+     * stratified over the pixel's samples as a 2D point. */
     const kd_f32 u = kd_sample_uniform(random), u2 = kd_sample_uniform(random);
     const kd_f32 diffuse_end = l->p_diffuse, gloss_end = diffuse_end + l->p_gloss;
     const kd_f32 mirror_end = gloss_end + l->p_mirror;
-    const kd_f32 lobe_start =
-        u < diffuse_end ? 0.0f
-                        : (u < gloss_end ? diffuse_end : (u < mirror_end ? gloss_end : mirror_end));
-    const kd_f32 lobe_share =
-        u < diffuse_end
-            ? l->p_diffuse
-            : (u < gloss_end ? l->p_gloss : (u < mirror_end ? l->p_mirror : l->p_glass));
-    const kd_f32 u1 =
-        lobe_share > 0.0f ? KDRAY_FMIN((u - lobe_start) / lobe_share, 0.99999994f) : 0.0f;
+    kd_f32 lobe_start = 0.0f, lobe_share = l->p_diffuse;
+    if (u >= diffuse_end) {
+        lobe_start = diffuse_end;
+        lobe_share = l->p_gloss;
+    }
+    if (u >= gloss_end) {
+        lobe_start = gloss_end;
+        lobe_share = l->p_mirror;
+    }
+    if (u >= mirror_end) {
+        lobe_start = mirror_end;
+        lobe_share = l->p_glass;
+    }
+    const kd_f32 u1 = kd_stretch_chosen(u, lobe_start, lobe_share);
     kd_f32 wi[3];
     next->tmin = 0.0f;
     next->tmax = KDRAY_INF;
@@ -373,7 +377,8 @@ KDRAY_HOT_INLINE void kd_trace_path_sample(const KdSceneView* scene, const KdVie
         /* Each vertex draws from dimensions of its own, whichever events it has: its light
          * sample's pair, its lobes' pair, and roulette's number, so that a pair means the same
          * event at the same depth in every sample of the pixel. */
-        random->dimension = (segments - 1u) * KDRAY_PATH_DIMENSIONS_PER_VERTEX;
+        const kd_u32 first_dimension = (segments - 1u) * KDRAY_PATH_DIMENSIONS_PER_VERTEX;
+        random->dimension = first_dimension;
 
         /* Next events: the lights, one more segment each. */
         KdPathLobes lobes;
@@ -388,7 +393,7 @@ KDRAY_HOT_INLINE void kd_trace_path_sample(const KdSceneView* scene, const KdVie
         }
 
         /* The next segment, drawn from the lobes. */
-        random->dimension = (segments - 1u) * KDRAY_PATH_DIMENSIONS_PER_VERTEX + 2u;
+        random->dimension = first_dimension + 2u;
         kd_f32 factor[3];
         KdRay next;
         const int kind = kd_path_sample_lobes(scene, view, m, tri, &lobes, p, ng, ns, ray.dir,
@@ -400,7 +405,7 @@ KDRAY_HOT_INLINE void kd_trace_path_sample(const KdSceneView* scene, const KdVie
         /* Russian roulette: an unbiased end to paths whose throughput has fallen. */
         if (segments >= KDRAY_PATH_ROULETTE_DEPTH) {
             const kd_f32 survive = KDRAY_FMIN(largest, KDRAY_PATH_MAX_SURVIVAL);
-            random->dimension = (segments - 1u) * KDRAY_PATH_DIMENSIONS_PER_VERTEX + 4u;
+            random->dimension = first_dimension + 4u;
             if (kd_sample_uniform(random) >= survive) return;
             for (int c = 0; c < 3; ++c) beta[c] /= survive;
         }

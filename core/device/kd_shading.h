@@ -256,6 +256,13 @@ KDRAY_HOT_INLINE kd_f32 kd_sample_uniform(KdSampleRandom* r) {
     return kd_unit_float(rotation + r->pair_index * ((d & 1u) ? KDRAY_R2_STEP1 : KDRAY_R2_STEP0));
 }
 
+/* A number u in [0, 1) that chose an interval [start, start + share) of [0, 1), stretched over
+ * that interval back to [0, 1) (pbrt's reuse of a sample): uniform again, and independent of the
+ * choice, so that one coordinate of a pair both chooses and places. */
+KDRAY_INLINE kd_f32 kd_stretch_chosen(kd_f32 u, kd_f32 start, kd_f32 share) {
+    return share > 0.0f ? KDRAY_FMIN((u - start) / share, 0.99999994f) : 0.0f;
+}
+
 /* The random numbers of sample s of pixel (x, y) for the integrator `salt` names: a key of their
  * own beside the jitter's. (Set through a pointer: a struct returned by value is an sret
  * argument, which LLVM marks noalias and then, inlined, declares with
